@@ -1,0 +1,54 @@
+# phex — entry points. `make demo` and `make test` install what is missing, build, then serve or test.
+SHELL := /bin/bash
+.SHELLFLAGS := -eo pipefail -c
+# Debian's emcc needs Node to find acorn; Emscripten 3.1.6 output under Node 20 needs the fetch flag.
+export NODE_PATH := /usr/share/nodejs
+NODE := node --no-experimental-fetch
+PORT ?= 8080
+
+.PHONY: all setup native wasm web test test-native test-wasm test-js test-browser demo bench clean
+
+all: native wasm web
+
+setup:
+	@bash scripts/setup.sh
+
+native: setup
+	@cmake -S . -B build/native -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+	@cmake --build build/native
+
+wasm: setup
+	@[ -f build/wasm/build.ninja ] || emcmake cmake -S . -B build/wasm -G Ninja -DCMAKE_BUILD_TYPE=Release \
+	  -DPHEX_PKG_DIR=$(CURDIR)/build/pkg >/dev/null
+	@cmake --build build/wasm
+
+web: wasm
+	@npm run --silent build:web
+
+test: native wasm web
+	@$(MAKE) --no-print-directory test-native test-wasm test-js test-browser
+
+test-native:
+	@echo "== Catch2, native (ctest)"
+	@ctest --test-dir build/native --output-on-failure
+
+test-wasm:
+	@echo "== Catch2, WebAssembly (node)"
+	@cd build/wasm/tests && $(NODE) phex_tests.cjs
+
+test-js:
+	@echo "== JS API (node)"
+	@$(NODE) --test tests/js/
+
+test-browser:
+	@echo "== app in headless Chromium"
+	@node --test tests/browser/
+
+demo: native wasm web
+	@node scripts/serve.js build/web $(PORT)
+
+bench: native wasm
+	@$(NODE) bench/run.mjs
+
+clean:
+	rm -rf build

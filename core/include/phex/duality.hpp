@@ -1,0 +1,38 @@
+// phex — from a triangulation to its dual hexagonal mesh (§4.1, §6).
+#pragma once
+#include <vector>
+
+#include "phex/mesh.hpp"
+#include "phex/triangulation.hpp"
+
+namespace phex {
+
+struct DualMesh {
+  PolyMesh mesh;                 // one face per interior vertex of the triangulation
+  std::vector<int> faceVertex;   // #faces: the triangulation vertex each face is dual to
+  std::vector<int> vertexTriangle;  // #V: the triangle each vertex is dual to
+  int fallbackCount = 0;         // dual vertices placed at the centroid (§6 parabolic fallback)
+};
+
+enum class Duality { Dupin, Tangent };
+
+// Dupin duality as the §6 initializer: for each triangle and each of its vertices, the Dupin conic (a
+// homothetic copy of the Dupin indicatrix) through the vertex and the projections of the other two onto
+// its tangent plane; the triangle's dual vertex is the average of the three conic centres. In a parabolic
+// region (Gaussian curvatures of differing signs, or |K| h^2 below 1e-8) the centroid is used (§6 step 1).
+DualMesh dupinDual(const Triangulation& triangulation, const ParametricSurface& surface);
+
+// Tangent duality (§4.1): the dual vertex of each triangle is the intersection of the tangent planes at
+// its three vertices. Where the planes are nearly parallel (near parabolic points or on tiny triangles)
+// the intersection is ill-posed, and the triangle's centroid is used instead (§6 step 1).
+// Throws Error(InvalidInput) for a non-manifold triangulation.
+DualMesh tangentDual(const Triangulation& triangulation, const ParametricSurface& surface);
+
+// One-ring of every vertex: the incident triangles in CCW order; `closed[v]` is false on the boundary.
+struct VertexRings {
+  std::vector<std::vector<int>> triangles;
+  std::vector<bool> closed;
+};
+VertexRings vertexRings(const TriMesh& mesh);
+
+}  // namespace phex

@@ -1,0 +1,28 @@
+// phex — basic geometric types shared by every stage.
+#pragma once
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace phex {
+
+using Vec2 = Eigen::Vector2d;
+using Vec3 = Eigen::Vector3d;
+using Box3 = Eigen::AlignedBox3d;
+
+// Second-order local geometry of a surface at one point (§3).
+// Sign convention: a principal curvature is positive where the surface bends away from `normal`,
+// so a sphere of radius R with outward normals has k1 = k2 = 1/R.
+// k1 >= k2; d1, d2 are unit principal directions in the tangent plane, d1 x d2 = normal.
+struct LocalGeometry {
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();
+  Vec3 d1 = Vec3::UnitX();
+  Vec3 d2 = Vec3::UnitY();
+  double k1 = 0.0;
+  double k2 = 0.0;
+
+  double gaussianCurvature() const { return k1 * k2; }
+  double meanCurvature() const { return 0.5 * (k1 + k2); }
+};
+
+}  // namespace phex

@@ -1,0 +1,40 @@
+// phex — mesh containers passed between stages (plain data, row-major so they copy flat to JS).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "phex/geometry.hpp"
+
+namespace phex {
+
+using Points = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;     // #V by 3 positions
+using Triangles = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;     // #F by 3 vertex ids, CCW seen from the normal side
+
+struct TriMesh {
+  Points V;
+  Triangles F;
+};
+
+// A polygon mesh: face f has the vertex ids indices[offsets[f] .. offsets[f+1]), CCW seen from the normal side.
+struct PolyMesh {
+  Points V;
+  std::vector<int> offsets{0};  // #F + 1 entries, offsets[0] = 0
+  std::vector<int> indices;     // offsets.back() entries
+
+  int faceCount() const { return static_cast<int>(offsets.size()) - 1; }
+  int faceSize(int f) const { return offsets[f + 1] - offsets[f]; }
+  const int* face(int f) const { return indices.data() + offsets[f]; }
+  Vec3 vertex(int v) const { return V.row(v).transpose(); }
+  void addFace(const std::vector<int>& ids);
+  // Mean edge length over all faces (each shared edge counted from both sides).
+  double meanEdgeLength() const;
+};
+
+// Wavefront OBJ text of a polygon / triangle mesh (1-based indices, 17 significant digits).
+std::string toObj(const PolyMesh& mesh);
+std::string toObj(const TriMesh& mesh);
+// Writes `text` to `path`; throws phex::Error(Io) naming the path when it cannot.
+void writeTextFile(const std::string& path, const std::string& text);
+
+}  // namespace phex

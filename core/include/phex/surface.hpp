@@ -1,0 +1,63 @@
+// phex — the one interface every algorithm asks about the shape being tiled (§3).
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "phex/geometry.hpp"
+
+namespace phex {
+
+class Surface {
+ public:
+  virtual ~Surface() = default;
+
+  // Short identifier, e.g. "torus".
+  virtual std::string name() const = 0;
+  // The point of the surface nearest to p, with its local geometry.
+  virtual LocalGeometry closestPoint(const Vec3& p) const = 0;
+  // Axis-aligned bounds of the (trimmed) surface.
+  virtual Box3 bounds() const = 0;
+  // True when the surface has no boundary (sphere, torus, ...).
+  virtual bool isClosed() const = 0;
+};
+
+// A surface given by P(u, v) on [u0, u1] x [v0, v1] with exact first and second derivatives.
+// A periodic direction wraps around (u1 is the same curve as u0).
+class ParametricSurface : public Surface {
+ public:
+  struct Domain {
+    double u0 = 0, u1 = 1, v0 = 0, v1 = 1;
+    bool periodicU = false, periodicV = false;
+  };
+  // Position and its derivatives up to second order at (u, v).
+  struct Jet {
+    Vec3 P, Pu, Pv, Puu, Puv, Pvv;
+  };
+
+  virtual Jet jet(double u, double v) const = 0;
+  virtual Domain domain() const = 0;
+
+  Vec3 position(double u, double v) const { return jet(u, v).P; }
+  // Normal, principal curvatures and directions at (u, v), from the two fundamental forms.
+  LocalGeometry geometryAt(double u, double v) const;
+  // Projects p onto the surface by Newton's method on (u, v), starting from `uv`; returns the
+  // parameters of the foot point (clamped to the domain, wrapped in periodic directions).
+  Vec2 project(const Vec3& p, Vec2 uv) const;
+
+  LocalGeometry closestPoint(const Vec3& p) const override;
+  Box3 bounds() const override;
+  bool isClosed() const override;
+
+  // Wraps periodic coordinates into the domain and clamps the others.
+  Vec2 normalize(Vec2 uv) const;
+
+ private:
+  void ensureSeeds() const;
+  mutable std::vector<Vec3> seedPoints_;
+  mutable std::vector<Vec2> seedParams_;
+};
+
+using SurfacePtr = std::shared_ptr<const ParametricSurface>;
+
+}  // namespace phex

@@ -1,0 +1,32 @@
+// phex — the analytic surfaces (exact derivatives), listed by name with documented parameters.
+#pragma once
+#include <map>
+#include <string>
+#include <vector>
+
+#include "phex/surface.hpp"
+
+namespace phex {
+
+struct ParameterSpec {
+  std::string name;
+  double defaultValue;
+  double min, max;  // inclusive valid range
+  std::string description;
+};
+
+struct SurfaceSpec {
+  std::string name;
+  std::string description;
+  std::vector<ParameterSpec> parameters;
+};
+
+using SurfaceParams = std::map<std::string, double>;
+
+// Every analytic surface phex knows, with its parameters and their defaults and ranges.
+const std::vector<SurfaceSpec>& analyticSurfaces();
+// Builds the named surface; parameters not given take their defaults. Throws
+// Error(InvalidParameter) for an unknown name, an unknown parameter or a value out of range.
+SurfacePtr makeSurface(const std::string& name, const SurfaceParams& params = {});
+
+}  // namespace phex

@@ -1,0 +1,64 @@
+#include "phex/mesh.hpp"
+
+#include <cstdio>
+#include <fstream>
+
+#include "phex/error.hpp"
+
+namespace phex {
+
+void PolyMesh::addFace(const std::vector<int>& ids) {
+  indices.insert(indices.end(), ids.begin(), ids.end());
+  offsets.push_back(static_cast<int>(indices.size()));
+}
+
+double PolyMesh::meanEdgeLength() const {
+  double sum = 0.0;
+  long count = 0;
+  for (int f = 0; f < faceCount(); ++f) {
+    const int n = faceSize(f);
+    const int* ids = face(f);
+    for (int i = 0; i < n; ++i) sum += (V.row(ids[i]) - V.row(ids[(i + 1) % n])).norm(), ++count;
+  }
+  return count ? sum / count : 0.0;
+}
+
+namespace {
+void appendVertices(std::string& out, const Points& V) {
+  char buf[96];
+  for (int i = 0; i < V.rows(); ++i) {
+    std::snprintf(buf, sizeof buf, "v %.17g %.17g %.17g\n", V(i, 0), V(i, 1), V(i, 2));
+    out += buf;
+  }
+}
+}  // namespace
+
+std::string toObj(const PolyMesh& mesh) {
+  std::string out = "# phex P-Hex mesh\n";
+  appendVertices(out, mesh.V);
+  for (int f = 0; f < mesh.faceCount(); ++f) {
+    out += 'f';
+    for (int i = 0; i < mesh.faceSize(f); ++i) out += ' ' + std::to_string(mesh.face(f)[i] + 1);
+    out += '\n';
+  }
+  return out;
+}
+
+std::string toObj(const TriMesh& mesh) {
+  std::string out = "# phex triangulation\n";
+  appendVertices(out, mesh.V);
+  for (int f = 0; f < mesh.F.rows(); ++f)
+    out += "f " + std::to_string(mesh.F(f, 0) + 1) + ' ' + std::to_string(mesh.F(f, 1) + 1) + ' ' +
+           std::to_string(mesh.F(f, 2) + 1) + '\n';
+  return out;
+}
+
+void writeTextFile(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw Error(ErrorCode::Io, "cannot open '" + path + "' for writing (does its directory exist?)");
+  out << text;
+  out.close();
+  if (!out) throw Error(ErrorCode::Io, "failed writing '" + path + "'");
+}
+
+}  // namespace phex

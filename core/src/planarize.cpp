@@ -1,0 +1,206 @@
+#include "phex/planarize.hpp"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "phex/error.hpp"
+#include "phex/metrics.hpp"
+
+namespace phex {
+namespace {
+
+void store(double* dst, const Vec3& v) { dst[0] = v.x(), dst[1] = v.y(), dst[2] = v.z(); }
+
+// Scaled volume of the tetrahedron (a, b, c, d): s * (b - a) . ((c - a) x (d - a)) / 6, with exact Jacobians.
+class TetVolume final : public ceres::SizedCostFunction<1, 3, 3, 3, 3> {
+ public:
+  explicit TetVolume(double scale) : s_(scale / 6.0) {}
+  bool Evaluate(double const* const* x, double* residual, double** jac) const override {
+    const Eigen::Map<const Vec3> a(x[0]), b(x[1]), c(x[2]), d(x[3]);
+    const Vec3 ab = b - a, ac = c - a, ad = d - a;
+    const Vec3 gb = ac.cross(ad), gc = ad.cross(ab), gd = ab.cross(ac);
+    residual[0] = s_ * ab.dot(gb);
+    if (jac) {
+      const Vec3 g[4] = {-(gb + gc + gd), gb, gc, gd};
+      for (int k = 0; k < 4; ++k)
+        if (jac[k]) store(jac[k], s_ * g[k]);
+    }
+    return true;
+  }
+
+ private:
+  double s_;
+};
+
+// sqrt(weight) * (x - anchor) / h: keeps a vertex near its initial position (F_s).
+class Closeness final : public ceres::SizedCostFunction<3, 3> {
+ public:
+  Closeness(const Vec3& anchor, const double* weight) : anchor_(anchor), w_(weight) {}
+  bool Evaluate(double const* const* x, double* residual, double** jac) const override {
+    store(residual, *w_ * (Eigen::Map<const Vec3>(x[0]) - anchor_));
+    if (jac && jac[0]) {
+      std::fill(jac[0], jac[0] + 9, 0.0);
+      jac[0][0] = jac[0][4] = jac[0][8] = *w_;
+    }
+    return true;
+  }
+
+ private:
+  Vec3 anchor_;
+  const double* w_;
+};
+
+// sqrt(weight) * n . (x - c) / h: distance to the surface's tangent plane at the foot point c (F_d,
+// linearized; the foot points are recomputed every round).
+class SurfaceDistance final : public ceres::SizedCostFunction<1, 3> {
+ public:
+  SurfaceDistance(const LocalGeometry* foot, const double* weight) : foot_(foot), w_(weight) {}
+  bool Evaluate(double const* const* x, double* residual, double** jac) const override {
+    residual[0] = *w_ * foot_->normal.dot(Eigen::Map<const Vec3>(x[0]) - foot_->point);
+    if (jac && jac[0]) store(jac[0], *w_ * foot_->normal);
+    return true;
+  }
+
+ private:
+  const LocalGeometry* foot_;
+  const double* w_;
+};
+
+double maxPlanarity(const PolyMesh& mesh) {
+  double m = 0;
+  for (int f = 0; f < mesh.faceCount(); ++f) m = std::max(m, facePlanarity(mesh, f));
+  return m;
+}
+
+class RoundCallback final : public ceres::IterationCallback {
+ public:
+  RoundCallback(PolyMesh& mesh, const double* x, const PlanarizeOptions& o, PlanarizeReport& r, const ProgressFn& p,
+                const CancelFlag* c, int round, double lambda)
+      : mesh_(mesh), x_(x), options_(o), report_(r), progress_(p), cancel_(c), round_(round), lambda_(lambda) {}
+
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    if (cancel_ && cancel_->load(std::memory_order_relaxed)) return ceres::SOLVER_ABORT;
+    if (s.iteration == 0) return ceres::SOLVER_CONTINUE;
+    for (int v = 0; v < mesh_.V.rows(); ++v) mesh_.V.row(v) = Eigen::Map<const Vec3>(x_ + 3 * v).transpose();
+    IterationLog log;
+    log.round = round_;
+    log.iteration = static_cast<int>(report_.log.size()) + 1;
+    log.lambda = lambda_;
+    log.objective = 2.0 * s.cost;
+    log.planarityMax = maxPlanarity(mesh_);
+    log.milliseconds = 1000.0 * s.iteration_time_in_seconds;
+    report_.log.push_back(log);
+    if (progress_) {
+      std::ostringstream msg;
+      msg << "round " << round_ << ", iteration " << log.iteration << ", planarity " << log.planarityMax;
+      progress_({"planarize", std::min(1.0, double(log.iteration) / options_.maxIterations), msg.str()});
+    }
+    if (log.planarityMax <= options_.tolerance) return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    if (static_cast<int>(report_.log.size()) >= options_.maxIterations) return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  PolyMesh& mesh_;
+  const double* x_;
+  const PlanarizeOptions& options_;
+  PlanarizeReport& report_;
+  const ProgressFn& progress_;
+  const CancelFlag* cancel_;
+  int round_;
+  double lambda_;
+};
+
+}  // namespace
+
+PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const ProgressFn& progress,
+                          const CancelFlag* cancel) {
+  if (!(options.tolerance > 0) || !std::isfinite(options.tolerance))
+    throw Error(ErrorCode::InvalidParameter, "tolerance must be a positive number");
+  if (!(options.lambda >= 0) || !std::isfinite(options.lambda)) throw Error(ErrorCode::InvalidParameter, "lambda must be >= 0");
+  if (!(options.mu >= 0) || !std::isfinite(options.mu)) throw Error(ErrorCode::InvalidParameter, "mu must be >= 0");
+  if (options.mu > 0 && !options.surface) throw Error(ErrorCode::InvalidParameter, "mu > 0 needs a surface");
+  if (options.maxIterations < 1) throw Error(ErrorCode::InvalidParameter, "maxIterations must be at least 1");
+  if (!mesh.V.allFinite()) throw Error(ErrorCode::InvalidInput, "the mesh to planarize has non-finite coordinates");
+
+  PlanarizeReport report;
+  report.initialPlanarityMax = report.planarityMax = maxPlanarity(mesh);
+  report.converged = report.planarityMax <= options.tolerance;
+  if (report.converged) return report;
+
+  const int nv = static_cast<int>(mesh.V.rows());
+  const double h = mesh.meanEdgeLength();
+  if (!(h > 0)) throw Error(ErrorCode::InvalidInput, "the mesh to planarize has no edge of positive length");
+  std::vector<double> x(3 * static_cast<std::size_t>(nv));
+  for (int v = 0; v < nv; ++v) store(&x[3 * v], mesh.vertex(v));
+
+  ceres::Problem::Options po;
+  po.enable_fast_removal = false;
+  ceres::Problem problem(po);
+  for (int v = 0; v < nv; ++v) problem.AddParameterBlock(&x[3 * v], 3);
+  // F(f): every run of four consecutive vertices, volume scaled by the face's own edge length cubed.
+  for (int f = 0; f < mesh.faceCount(); ++f) {
+    const int n = mesh.faceSize(f);
+    if (n < 4) continue;
+    const int* ids = mesh.face(f);
+    double hf = 0;
+    for (int i = 0; i < n; ++i) hf += (mesh.vertex(ids[i]) - mesh.vertex(ids[(i + 1) % n])).norm();
+    hf /= n;
+    const double scale = 1.0 / (hf * hf * hf);
+    for (int i = 0; i < (n == 4 ? 1 : n); ++i)  // a quad's four quadruples are the same tetrahedron
+      problem.AddResidualBlock(new TetVolume(scale), nullptr, &x[3 * ids[i]], &x[3 * ids[(i + 1) % n]],
+                               &x[3 * ids[(i + 2) % n]], &x[3 * ids[(i + 3) % n]]);
+  }
+  double closenessWeight = 0, distanceWeight = std::sqrt(options.mu) / h;
+  for (int v = 0; v < nv; ++v) problem.AddResidualBlock(new Closeness(mesh.vertex(v), &closenessWeight), nullptr, &x[3 * v]);
+  std::vector<LocalGeometry> feet;
+  if (options.mu > 0) {
+    feet.resize(nv);
+    for (int v = 0; v < nv; ++v) problem.AddResidualBlock(new SurfaceDistance(&feet[v], &distanceWeight), nullptr, &x[3 * v]);
+  }
+
+  double lambda = options.lambda;
+  for (int round = 1; static_cast<int>(report.log.size()) < options.maxIterations; ++round) {
+    checkCancel(cancel);
+    closenessWeight = std::sqrt(lambda) / h;
+    for (std::size_t v = 0; v < feet.size(); ++v) feet[v] = options.surface->closestPoint(Eigen::Map<const Vec3>(&x[3 * v]));
+
+    ceres::Solver::Options so;
+    so.minimizer_type = ceres::TRUST_REGION;
+    so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    so.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
+    so.num_threads = 1;
+    so.max_num_iterations = 1;  // §6: one Gauss-Newton step per value of lambda
+    so.function_tolerance = 1e-16;
+    so.initial_trust_region_radius = 1e12;  // behave as plain Gauss-Newton unless a step fails
+    so.gradient_tolerance = 0;
+    so.parameter_tolerance = 1e-15;
+    so.logging_type = ceres::SILENT;
+    so.minimizer_progress_to_stdout = false;
+    so.update_state_every_iteration = true;
+    RoundCallback callback(mesh, x.data(), options, report, progress, cancel, round, lambda);
+    so.callbacks.push_back(&callback);
+    ceres::Solver::Summary summary;
+    const std::size_t before = report.log.size();
+    ceres::Solve(so, &problem, &summary);
+    checkCancel(cancel);
+    if (summary.termination_type == ceres::FAILURE)
+      throw Error(ErrorCode::Internal, "planarity solver failed: " + summary.message);
+
+    for (int v = 0; v < nv; ++v) mesh.V.row(v) = Eigen::Map<const Vec3>(&x[3 * v]).transpose();
+    report.rounds = round;
+    report.planarityMax = maxPlanarity(mesh);
+    if (report.planarityMax <= options.tolerance) break;
+    if (report.log.size() == before && lambda == 0) break;  // no further progress possible
+    lambda = lambda > 1e-30 ? lambda * 0.1 : 0.0;  // §6: lambda divided by 10 every round
+  }
+  report.iterations = static_cast<int>(report.log.size());
+  report.converged = report.planarityMax <= options.tolerance;
+  return report;
+}
+
+}  // namespace phex

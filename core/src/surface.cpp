@@ -1,0 +1,123 @@
+#include "phex/surface.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace phex {
+
+LocalGeometry ParametricSurface::geometryAt(double u, double v) const {
+  const Jet j = jet(u, v);
+  LocalGeometry g;
+  g.point = j.P;
+  Vec3 n = j.Pu.cross(j.Pv);
+  const double nn = n.norm();
+  if (!(nn > 0)) {
+    // Degenerate parametrization (a pole): fall back to a neighbouring regular point for the frame.
+    const Domain d = domain();
+    const double eps = 1e-7 * std::max(d.u1 - d.u0, d.v1 - d.v0);
+    const Jet k = jet(u, v + (v > 0.5 * (d.v0 + d.v1) ? -eps : eps));
+    n = k.Pu.cross(k.Pv);
+  }
+  n.normalize();
+  g.normal = n;
+  // First and second fundamental forms; the shape operator's eigenpairs solve (-II) a = k I a,
+  // the sign making k > 0 where the surface bends away from the normal.
+  Eigen::Matrix2d I, II;
+  I << j.Pu.dot(j.Pu), j.Pu.dot(j.Pv), j.Pu.dot(j.Pv), j.Pv.dot(j.Pv);
+  II << -j.Puu.dot(n), -j.Puv.dot(n), -j.Puv.dot(n), -j.Pvv.dot(n);
+  if (!(I.determinant() > 1e-300)) {
+    g.d1 = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized();
+    g.d2 = n.cross(g.d1);
+    return g;
+  }
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix2d> es(II, I);
+  const Eigen::Vector2d k = es.eigenvalues();  // ascending
+  const Eigen::Matrix2d a = es.eigenvectors();
+  g.k1 = k(1);
+  g.k2 = k(0);
+  g.d1 = (a(0, 1) * j.Pu + a(1, 1) * j.Pv).normalized();
+  // d2 from the frame so that (d1, d2, n) is right-handed and exactly orthonormal.
+  g.d1 = (g.d1 - g.d1.dot(n) * n).normalized();
+  g.d2 = n.cross(g.d1);
+  return g;
+}
+
+Vec2 ParametricSurface::normalize(Vec2 uv) const {
+  const Domain d = domain();
+  auto wrap = [](double x, double a, double b) {
+    const double p = b - a;
+    x = std::fmod(x - a, p);
+    if (x < 0) x += p;
+    return a + x;
+  };
+  uv.x() = d.periodicU ? wrap(uv.x(), d.u0, d.u1) : std::clamp(uv.x(), d.u0, d.u1);
+  uv.y() = d.periodicV ? wrap(uv.y(), d.v0, d.v1) : std::clamp(uv.y(), d.v0, d.v1);
+  return uv;
+}
+
+Vec2 ParametricSurface::project(const Vec3& p, Vec2 uv) const {
+  // Newton's method on f(u, v) = |P(u, v) - p|^2 / 2, with a gradient step when the Hessian is indefinite.
+  uv = normalize(uv);
+  for (int it = 0; it < 50; ++it) {
+    const Jet j = jet(uv.x(), uv.y());
+    const Vec3 r = j.P - p;
+    const Eigen::Vector2d g(j.Pu.dot(r), j.Pv.dot(r));
+    Eigen::Matrix2d H;
+    H << j.Pu.dot(j.Pu) + j.Puu.dot(r), j.Pu.dot(j.Pv) + j.Puv.dot(r), j.Pu.dot(j.Pv) + j.Puv.dot(r),
+        j.Pv.dot(j.Pv) + j.Pvv.dot(r);
+    Eigen::Vector2d step;
+    if (H.determinant() > 0 && H(0, 0) > 0) {
+      step = -H.ldlt().solve(g);
+    } else {
+      Eigen::Matrix2d I;
+      I << j.Pu.dot(j.Pu), j.Pu.dot(j.Pv), j.Pu.dot(j.Pv), j.Pv.dot(j.Pv);
+      step = -I.ldlt().solve(g);  // Gauss-Newton step
+    }
+    if (!step.allFinite()) break;
+    const Vec2 next = normalize(uv + step);
+    const double moved = (next - uv).norm();
+    uv = next;
+    if (moved < 1e-15 * (1.0 + uv.norm())) break;
+  }
+  return uv;
+}
+
+void ParametricSurface::ensureSeeds() const {
+  if (!seedPoints_.empty()) return;
+  const Domain d = domain();
+  constexpr int n = 48;
+  for (int i = 0; i <= n; ++i)
+    for (int k = 0; k <= n; ++k) {
+      const Vec2 uv(d.u0 + (d.u1 - d.u0) * i / n, d.v0 + (d.v1 - d.v0) * k / n);
+      seedParams_.push_back(uv);
+      seedPoints_.push_back(position(uv.x(), uv.y()));
+    }
+}
+
+LocalGeometry ParametricSurface::closestPoint(const Vec3& p) const {
+  ensureSeeds();
+  std::size_t best = 0;
+  double bestD = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < seedPoints_.size(); ++i) {
+    const double dd = (seedPoints_[i] - p).squaredNorm();
+    if (dd < bestD) bestD = dd, best = i;
+  }
+  const Vec2 uv = project(p, seedParams_[best]);
+  return geometryAt(uv.x(), uv.y());
+}
+
+Box3 ParametricSurface::bounds() const {
+  ensureSeeds();
+  Box3 b;
+  for (const Vec3& q : seedPoints_) b.extend(q);
+  return b;
+}
+
+bool ParametricSurface::isClosed() const {
+  const Domain d = domain();
+  return d.periodicU && d.periodicV;
+}
+
+}  // namespace phex

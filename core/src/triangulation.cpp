@@ -1,0 +1,98 @@
+#include "phex/triangulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "phex/error.hpp"
+
+namespace phex {
+namespace {
+
+// Mean length of the u-curves and v-curves of the domain, sampled.
+Eigen::Vector2d meanCurveLengths(const ParametricSurface& s) {
+  const auto d = s.domain();
+  constexpr int n = 32;
+  double lu = 0, lv = 0;
+  for (int i = 0; i < n; ++i) {
+    const double t = (i + 0.5) / n;
+    for (int k = 0; k < n; ++k) {
+      const double w = (k + 0.5) / n;
+      const auto j = s.jet(d.u0 + (d.u1 - d.u0) * w, d.v0 + (d.v1 - d.v0) * t);
+      lu += j.Pu.norm() * (d.u1 - d.u0);
+      lv += j.Pv.norm() * (d.v1 - d.v0);
+    }
+  }
+  return {lu / (n * n), lv / (n * n)};
+}
+
+// Zips two rows of vertices (sorted by u) into a strip of triangles, CCW in (u, v) with `a` below `b`.
+void zipRows(const std::vector<int>& a, const std::vector<double>& ua, const std::vector<int>& b,
+             const std::vector<double>& ub, bool periodic, double period, std::vector<Eigen::Vector3i>& out) {
+  const int na = static_cast<int>(a.size()), nb = static_cast<int>(b.size());
+  auto uA = [&](int i) { return i < na ? ua[i] : ua[i - na] + period; };
+  auto uB = [&](int k) { return k < nb ? ub[k] : ub[k - nb] + period; };
+  const int endA = periodic ? na : na - 1, endB = periodic ? nb : nb - 1;
+  int i = 0, k = 0;
+  while (i < endA || k < endB) {
+    if (i < endA && (k == endB || uA(i + 1) < uB(k + 1))) {
+      out.emplace_back(a[i % na], a[(i + 1) % na], b[k % nb]);
+      ++i;
+    } else {
+      out.emplace_back(a[i % na], b[(k + 1) % nb], b[k % nb]);
+      ++k;
+    }
+  }
+}
+
+}  // namespace
+
+double cellForFaceCount(const ParametricSurface& surface, int faces) {
+  const Eigen::Vector2d L = meanCurveLengths(surface);
+  // Each vertex of a regular triangulation with edge h owns an area of sqrt(3)/2 h^2.
+  return std::sqrt(L.x() * L.y() / (std::max(faces, 1) * std::sqrt(3.0) / 2.0));
+}
+
+Triangulation latticeTriangulation(const ParametricSurface& surface, double cell) {
+  if (!(cell > 0) || !std::isfinite(cell)) throw Error(ErrorCode::InvalidParameter, "cell size must be positive");
+  const auto d = surface.domain();
+  const Eigen::Vector2d L = meanCurveLengths(surface);
+  const double rowStep = cell * std::sqrt(3.0) / 2.0;
+  int nu = std::max(3, static_cast<int>(std::lround(L.x() / cell)));
+  int nv = std::max(2, static_cast<int>(std::lround(L.y() / rowStep)));
+  if (d.periodicV) nv = std::max(4, nv + (nv % 2));  // shifted rows must alternate around the loop
+  const double du = (d.u1 - d.u0) / nu, dv = (d.v1 - d.v0) / nv;
+  const int rows = d.periodicV ? nv : nv + 1;
+
+  Triangulation t;
+  std::vector<std::vector<int>> ids(rows);
+  std::vector<std::vector<double>> us(rows);
+  for (int r = 0; r < rows; ++r) {
+    const bool shifted = r % 2 == 1;
+    std::vector<double>& u = us[r];
+    if (d.periodicU) {
+      for (int i = 0; i < nu; ++i) u.push_back(d.u0 + (i + (shifted ? 0.5 : 0.0)) * du);
+    } else if (!shifted) {
+      for (int i = 0; i <= nu; ++i) u.push_back(d.u0 + i * du);
+    } else {  // half-shifted row, closed by the two boundary points
+      u.push_back(d.u0);
+      for (int i = 0; i < nu; ++i) u.push_back(d.u0 + (i + 0.5) * du);
+      u.push_back(d.u1);
+    }
+    for (double x : u) {
+      ids[r].push_back(static_cast<int>(t.uv.size()));
+      t.uv.emplace_back(x, d.v0 + r * dv);
+    }
+  }
+  std::vector<Eigen::Vector3i> tris;
+  const double period = d.u1 - d.u0;
+  for (int r = 0; r + 1 < rows; ++r) zipRows(ids[r], us[r], ids[r + 1], us[r + 1], d.periodicU, period, tris);
+  if (d.periodicV) zipRows(ids[rows - 1], us[rows - 1], ids[0], us[0], d.periodicU, period, tris);
+
+  t.mesh.V.resize(static_cast<int>(t.uv.size()), 3);
+  for (int i = 0; i < static_cast<int>(t.uv.size()); ++i) t.mesh.V.row(i) = surface.position(t.uv[i].x(), t.uv[i].y());
+  t.mesh.F.resize(static_cast<int>(tris.size()), 3);
+  for (int f = 0; f < static_cast<int>(tris.size()); ++f) t.mesh.F.row(f) = tris[f].transpose();
+  return t;
+}
+
+}  // namespace phex

@@ -1,0 +1,169 @@
+// phex — command-line tool: computes P-Hex meshes from the analytic surfaces.
+#include <phex/error.hpp>
+#include <phex/pipeline.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+using nlohmann::json;
+
+namespace {
+
+const char* kHelp = R"(phex — hexagonal meshes with planar faces (P-Hex meshes)
+
+Usage:
+  phex run [options]        compute a P-Hex mesh of a surface
+  phex surfaces             list the analytic surfaces and their parameters
+  phex --help | --version
+
+Options of `phex run`:
+  --surface NAME            analytic surface (default torus; see `phex surfaces`)
+  --param NAME=VALUE        a surface parameter, e.g. --param R=2 (repeatable)
+  --faces N                 wanted number of hexagons, 12..1000000 (default 2000)
+  --cell H                  wanted edge length of the triangulation instead of --faces
+  --tolerance T             planarity goal relative to edge length (default 1e-9)
+  --lambda L                initial closeness weight, divided by 10 every round (default 1)
+  --mu M                    surface-distance weight (default 0)
+  --max-iterations N        Gauss-Newton iteration cap (default 100)
+  --duality dupin|tangent   initial hexagonal mesh: Dupin duality (default, §6) or tangent duality (§4.1)
+  --out FILE.obj            write the P-Hex mesh as OBJ
+  --triangulation FILE.obj  write the triangulation as OBJ
+  --initial FILE.obj        write the mesh before optimization as OBJ
+  --report FILE.json        write counts, planarity, iterations and timings as JSON
+  --quiet                   no progress on stderr
+
+Exit status: 0 on success, 1 when the input or a parameter is wrong (the message says which),
+2 when the result misses the planarity goal or has self-intersecting faces, 3 on internal errors.
+)";
+
+[[noreturn]] void usage(const std::string& msg) {
+  throw phex::Error(phex::ErrorCode::InvalidParameter, msg + " (see phex --help)");
+}
+
+double parseNumber(const std::string& opt, const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(v)) usage(opt + " expects a number, got '" + text + "'");
+  return v;
+}
+
+int parseInt(const std::string& opt, const std::string& text) {
+  const double v = parseNumber(opt, text);
+  if (v != std::floor(v) || std::abs(v) > 2e9) usage(opt + " expects an integer, got '" + text + "'");
+  return static_cast<int>(v);
+}
+
+json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
+  json bySize = json::object();
+  for (const auto& [size, count] : r.metrics.facesBySize) bySize[std::to_string(size)] = count;
+  json timings = json::object();
+  for (const auto& t : r.timings) timings[t.stage] = t.milliseconds;
+  timings["total"] = r.totalMilliseconds;
+  json log = json::array();
+  for (const auto& it : r.solve.log)
+    log.push_back({{"round", it.round}, {"iteration", it.iteration}, {"lambda", it.lambda},
+                   {"objective", it.objective}, {"planarityMax", it.planarityMax}, {"milliseconds", it.milliseconds}});
+  json params = {{"surface", p.surface}, {"surfaceParams", p.surfaceParams}, {"faces", p.faces}, {"cell", p.cell},
+                 {"tolerance", p.tolerance}, {"lambda", p.lambda}, {"mu", p.mu}, {"maxIterations", p.maxIterations},
+                 {"duality", phex::dualityName(p.duality)}};
+  return {{"phex", "0.1.0"},
+          {"params", params},
+          {"triangulation", {{"vertices", r.triangulation.mesh.V.rows()}, {"triangles", r.triangulation.mesh.F.rows()}}},
+          {"mesh", {{"vertices", r.metrics.vertexCount}, {"faces", r.metrics.faceCount}, {"facesBySize", bySize}}},
+          {"planarity", {{"max", r.metrics.planarityMax}, {"mean", r.metrics.planarityMean},
+                         {"initialMax", r.solve.initialPlanarityMax}}},
+          {"invalidFaces", r.metrics.selfIntersectingCount},
+          {"dualFallbacks", r.dual.fallbackCount},
+          {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
+                      {"log", log}}},
+          {"milliseconds", timings}};
+}
+
+int run(const std::vector<std::string>& args) {
+  phex::PipelineParams p;
+  std::string out, tri, initial, reportPath;
+  bool quiet = false;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    auto value = [&]() -> const std::string& {
+      if (i + 1 >= args.size()) usage(a + " needs a value");
+      return args[++i];
+    };
+    if (a == "--surface") p.surface = value();
+    else if (a == "--param") {
+      const std::string& kv = value();
+      const auto eq = kv.find('=');
+      if (eq == std::string::npos || eq == 0) usage("--param expects NAME=VALUE, got '" + kv + "'");
+      p.surfaceParams[kv.substr(0, eq)] = parseNumber("--param " + kv.substr(0, eq), kv.substr(eq + 1));
+    } else if (a == "--faces") p.faces = parseInt(a, value());
+    else if (a == "--cell") p.cell = parseNumber(a, value());
+    else if (a == "--tolerance") p.tolerance = parseNumber(a, value());
+    else if (a == "--lambda") p.lambda = parseNumber(a, value());
+    else if (a == "--mu") p.mu = parseNumber(a, value());
+    else if (a == "--max-iterations") p.maxIterations = parseInt(a, value());
+    else if (a == "--duality") p.duality = phex::parseDuality(value());
+    else if (a == "--out") out = value();
+    else if (a == "--triangulation") tri = value();
+    else if (a == "--initial") initial = value();
+    else if (a == "--report") reportPath = value();
+    else if (a == "--quiet") quiet = true;
+    else usage("unknown option '" + a + "'");
+  }
+  if (p.cell != 0 && !(p.cell > 0)) usage("--cell must be positive");
+  phex::validate(p);
+  // Fail on an unwritable output before computing anything.
+  for (const std::string* path : {&out, &tri, &initial, &reportPath})
+    if (!path->empty()) phex::writeTextFile(*path, "");
+
+  phex::ProgressFn progress;
+  if (!quiet)
+    progress = [](const phex::Progress& pr) { std::cerr << "[" << pr.stage << "] " << pr.message << "\n"; };
+  const phex::PipelineResult r = phex::runPipeline(p, progress);
+  if (!out.empty()) phex::writeTextFile(out, phex::toObj(r.hex));
+  if (!tri.empty()) phex::writeTextFile(tri, phex::toObj(r.triangulation.mesh));
+  if (!initial.empty()) phex::writeTextFile(initial, phex::toObj(r.initial));
+  const json rep = reportJson(p, r);
+  if (!reportPath.empty()) phex::writeTextFile(reportPath, rep.dump(2) + "\n");
+  std::cout << "faces " << r.metrics.faceCount << ", planarity max " << r.metrics.planarityMax << ", invalid faces "
+            << r.metrics.selfIntersectingCount << ", iterations " << r.solve.iterations << ", " << r.totalMilliseconds
+            << " ms\n";
+  return (r.solve.converged && r.metrics.selfIntersectingCount == 0) ? 0 : 2;
+}
+
+int surfaces() {
+  for (const auto& s : phex::analyticSurfaces()) {
+    std::cout << s.name << " — " << s.description << "\n";
+    for (const auto& prm : s.parameters)
+      std::cout << "    " << prm.name << " = " << prm.defaultValue << "  [" << prm.min << ", " << prm.max << "]  "
+                << prm.description << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  try {
+    if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+      std::cout << kHelp;
+      return args.empty() ? 1 : 0;
+    }
+    if (args[0] == "--version") return std::cout << "phex 0.1.0\n", 0;
+    const std::string cmd = args[0];
+    args.erase(args.begin());
+    if (cmd == "run") return run(args);
+    if (cmd == "surfaces") return surfaces();
+    usage("unknown command '" + cmd + "'");
+  } catch (const phex::Error& e) {
+    std::cerr << "phex: error: " << e.what() << "\n";
+    return e.code() == phex::ErrorCode::Internal ? 3 : 1;
+  } catch (const std::exception& e) {
+    std::cerr << "phex: internal error: " << e.what() << "\n";
+    return 3;
+  }
+}

@@ -1,0 +1,42 @@
+#include <catch.hpp>
+
+#include "phex/duality.hpp"
+#include "phex/error.hpp"
+#include "phex/metrics.hpp"
+#include "phex/surfaces.hpp"
+
+using namespace phex;
+
+TEST_CASE("duality: tangent dual faces lie in the tangent planes (§4.1)") {
+  const SurfacePtr s = makeSurface("sphere");
+  const Triangulation t = latticeTriangulation(*s, cellForFaceCount(*s, 500));
+  const DualMesh d = tangentDual(t, *s);
+  CHECK(d.fallbackCount == 0);  // no parabolic point on a sphere
+  REQUIRE(d.mesh.faceCount() > 300);
+  for (int f = 0; f < d.mesh.faceCount(); ++f) {
+    const LocalGeometry g = s->geometryAt(t.uv[d.faceVertex[f]].x(), t.uv[d.faceVertex[f]].y());
+    for (int i = 0; i < d.mesh.faceSize(f); ++i)
+      REQUIRE(std::abs(g.normal.dot(d.mesh.vertex(d.mesh.face(f)[i]) - g.point)) < 1e-12);
+    REQUIRE(d.mesh.faceSize(f) == 6);
+  }
+  const MeshMetrics m = measure(d.mesh);
+  CHECK(m.planarityMax < 1e-12);
+  CHECK(m.selfIntersectingCount == 0);
+}
+
+TEST_CASE("duality: the torus falls back to centroids only near its parabolic circles") {
+  const SurfacePtr s = makeSurface("torus");
+  const Triangulation t = latticeTriangulation(*s, cellForFaceCount(*s, 2000));
+  const DualMesh d = tangentDual(t, *s);
+  CHECK(d.mesh.faceCount() == t.mesh.V.rows());
+  CHECK(d.fallbackCount < t.mesh.F.rows() / 5);
+  for (int i = 0; i < d.mesh.V.rows(); ++i) REQUIRE(d.mesh.V.row(i).allFinite());
+}
+
+TEST_CASE("duality: non-manifold input is rejected") {
+  TriMesh m;
+  m.V = Points::Random(5, 3);
+  m.F.resize(3, 3);
+  m.F << 0, 1, 2, 0, 1, 3, 0, 1, 4;  // edge 0-1 used three times
+  CHECK_THROWS_WITH(vertexRings(m), Catch::Contains("non-manifold"));
+}

@@ -1,0 +1,46 @@
+#include <catch.hpp>
+#include <cmath>
+
+#include "phex/error.hpp"
+#include "phex/metrics.hpp"
+#include "phex/planarize.hpp"
+
+using namespace phex;
+
+TEST_CASE("planarize: a bent hexagon becomes planar and stays close") {
+  PolyMesh m;
+  m.V.resize(6, 3);
+  for (int i = 0; i < 6; ++i) m.V.row(i) << std::cos(i * M_PI / 3), std::sin(i * M_PI / 3), (i % 2 ? 0.05 : -0.05);
+  m.addFace({0, 1, 2, 3, 4, 5});
+  const PolyMesh before = m;
+  PlanarizeOptions o;
+  const PlanarizeReport r = planarize(m, o);
+  CHECK(r.converged);
+  CHECK(r.initialPlanarityMax > 0.04);
+  CHECK(measure(m).planarityMax <= 1e-9);
+  CHECK((m.V - before.V).rowwise().norm().maxCoeff() < 0.1);
+  CHECK(r.iterations >= 1);
+  CHECK(r.log.back().planarityMax <= 1e-9);
+}
+
+TEST_CASE("planarize: bad options are rejected, cancel stops") {
+  PolyMesh m;
+  m.V = Points::Random(6, 3);
+  m.addFace({0, 1, 2, 3, 4, 5});
+  PlanarizeOptions o;
+  o.tolerance = -1;
+  CHECK_THROWS_WITH(planarize(m, o), Catch::Contains("tolerance"));
+  o = {};
+  o.mu = 1;
+  CHECK_THROWS_WITH(planarize(m, o), Catch::Contains("surface"));
+  o = {};
+  CancelFlag cancel{true};
+  try {
+    planarize(m, o, {}, &cancel);
+    FAIL("expected cancel");
+  } catch (const Error& e) {
+    CHECK(e.code() == ErrorCode::Cancelled);
+  }
+  m.V(0, 0) = std::nan("");
+  CHECK_THROWS_WITH(planarize(m, PlanarizeOptions{}), Catch::Contains("non-finite"));
+}

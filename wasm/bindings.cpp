@@ -1,0 +1,183 @@
+// phex — embind bindings. This file only converts between JS values and the core's plain data;
+// it computes nothing. Every C++ exception is caught here and returned as {ok: false, code, message},
+// which the ES-module wrapper (js/phex.js) throws as a PHexError.
+#include <emscripten/bind.h>
+#include <emscripten/val.h>
+
+#include <phex/error.hpp>
+#include <phex/pipeline.hpp>
+
+#include <cmath>
+#include <string>
+
+using emscripten::val;
+
+namespace {
+
+// Copies a contiguous array into a new JS typed array (the wasm heap may move, so never hand out views).
+template <typename T>
+val copyArray(const char* type, const T* data, std::size_t n) {
+  return val::global(type).new_(emscripten::typed_memory_view(n, data)).template call<val>("slice");
+}
+
+val meshToJs(const phex::PolyMesh& m) {
+  val out = val::object();
+  out.set("positions", copyArray("Float64Array", m.V.data(), static_cast<std::size_t>(m.V.size())));
+  std::vector<std::uint32_t> offsets(m.offsets.begin(), m.offsets.end()), indices(m.indices.begin(), m.indices.end());
+  out.set("faceOffsets", copyArray("Uint32Array", offsets.data(), offsets.size()));
+  out.set("faceIndices", copyArray("Uint32Array", indices.data(), indices.size()));
+  return out;
+}
+
+bool has(const val& o, const char* key) { return o.hasOwnProperty(key) && !o[key].isUndefined() && !o[key].isNull(); }
+
+double number(const val& o, const char* key) {
+  const val v = o[key];
+  if (v.typeOf().as<std::string>() != "number")
+    throw phex::Error(phex::ErrorCode::InvalidParameter, std::string(key) + " must be a number");
+  return v.as<double>();
+}
+
+int integer(const val& o, const char* key) {
+  const double d = number(o, key);
+  if (!std::isfinite(d) || d != std::floor(d) || std::abs(d) > 2e9)
+    throw phex::Error(phex::ErrorCode::InvalidParameter, std::string(key) + " must be an integer (got " + std::to_string(d) + ")");
+  return static_cast<int>(d);
+}
+
+phex::PipelineParams paramsFromJs(const val& o) {
+  if (o.typeOf().as<std::string>() != "object" || o.isNull())
+    throw phex::Error(phex::ErrorCode::InvalidParameter, "params must be an object");
+  phex::PipelineParams p;
+  if (has(o, "surface")) {
+    if (o["surface"].typeOf().as<std::string>() != "string")
+      throw phex::Error(phex::ErrorCode::InvalidParameter, "surface must be a string");
+    p.surface = o["surface"].as<std::string>();
+  }
+  if (has(o, "surfaceParams")) {
+    const val sp = o["surfaceParams"];
+    const val keys = val::global("Object").call<val>("keys", sp);
+    for (unsigned i = 0; i < keys["length"].as<unsigned>(); ++i) {
+      const std::string k = keys[i].as<std::string>();
+      p.surfaceParams[k] = number(sp, k.c_str());
+    }
+  }
+  if (has(o, "faces")) p.faces = integer(o, "faces");
+  if (has(o, "cell")) p.cell = number(o, "cell");
+  if (has(o, "tolerance")) p.tolerance = number(o, "tolerance");
+  if (has(o, "lambda")) p.lambda = number(o, "lambda");
+  if (has(o, "mu")) p.mu = number(o, "mu");
+  if (has(o, "maxIterations")) p.maxIterations = integer(o, "maxIterations");
+  if (has(o, "duality")) p.duality = phex::parseDuality(o["duality"].as<std::string>());
+  return p;
+}
+
+val resultToJs(const phex::PipelineResult& r) {
+  val out = val::object();
+  out.set("ok", true);
+  out.set("hex", meshToJs(r.hex));
+  out.set("initial", meshToJs(r.initial));
+  val tri = val::object();
+  const phex::TriMesh& T = r.triangulation.mesh;
+  tri.set("positions", copyArray("Float64Array", T.V.data(), static_cast<std::size_t>(T.V.size())));
+  std::vector<std::uint32_t> tris(T.F.data(), T.F.data() + T.F.size());
+  tri.set("triangles", copyArray("Uint32Array", tris.data(), tris.size()));
+  out.set("triangulation", tri);
+
+  val metrics = val::object();
+  const phex::MeshMetrics& m = r.metrics;
+  metrics.set("planarity", copyArray("Float64Array", m.planarity.data(), m.planarity.size()));
+  metrics.set("selfIntersecting", copyArray("Uint8Array", m.selfIntersecting.data(), m.selfIntersecting.size()));
+  metrics.set("vertexCount", m.vertexCount);
+  metrics.set("faceCount", m.faceCount);
+  val bySize = val::object();
+  for (const auto& [size, count] : m.facesBySize) bySize.set(std::to_string(size), count);
+  metrics.set("facesBySize", bySize);
+  metrics.set("planarityMax", m.planarityMax);
+  metrics.set("planarityMean", m.planarityMean);
+  metrics.set("selfIntersectingCount", m.selfIntersectingCount);
+  out.set("metrics", metrics);
+
+  val solve = val::object();
+  solve.set("iterations", r.solve.iterations);
+  solve.set("rounds", r.solve.rounds);
+  solve.set("converged", r.solve.converged);
+  solve.set("initialPlanarityMax", r.solve.initialPlanarityMax);
+  solve.set("planarityMax", r.solve.planarityMax);
+  val log = val::array();
+  for (const phex::IterationLog& it : r.solve.log) {
+    val e = val::object();
+    e.set("round", it.round);
+    e.set("iteration", it.iteration);
+    e.set("lambda", it.lambda);
+    e.set("objective", it.objective);
+    e.set("planarityMax", it.planarityMax);
+    e.set("milliseconds", it.milliseconds);
+    log.call<void>("push", e);
+  }
+  solve.set("log", log);
+  out.set("solve", solve);
+
+  val timings = val::object();
+  for (const phex::StageTiming& t : r.timings) timings.set(t.stage, t.milliseconds);
+  timings.set("total", r.totalMilliseconds);
+  out.set("timings", timings);
+  out.set("dualFallbacks", r.dual.fallbackCount);
+  return out;
+}
+
+val errorToJs(const char* code, const std::string& message) {
+  val out = val::object();
+  out.set("ok", false);
+  out.set("code", std::string(code));
+  out.set("message", message);
+  return out;
+}
+
+val run(val params, val onProgress) {
+  try {
+    const phex::PipelineParams p = paramsFromJs(params);
+    phex::ProgressFn progress;
+    if (onProgress.typeOf().as<std::string>() == "function")
+      progress = [&onProgress](const phex::Progress& pr) { onProgress(pr.stage, pr.fraction, pr.message); };
+    return resultToJs(phex::runPipeline(p, progress));
+  } catch (const phex::Error& e) {
+    return errorToJs(phex::errorCodeName(e.code()), e.what());
+  } catch (const std::bad_alloc&) {
+    return errorToJs("internal", "out of memory");
+  } catch (const std::exception& e) {
+    return errorToJs("internal", e.what());
+  }
+}
+
+val surfaces() {
+  val list = val::array();
+  for (const phex::SurfaceSpec& s : phex::analyticSurfaces()) {
+    val e = val::object();
+    e.set("name", s.name);
+    e.set("description", s.description);
+    val ps = val::array();
+    for (const phex::ParameterSpec& p : s.parameters) {
+      val q = val::object();
+      q.set("name", p.name);
+      q.set("default", p.defaultValue);
+      q.set("min", p.min);
+      q.set("max", p.max);
+      q.set("description", p.description);
+      ps.call<void>("push", q);
+    }
+    e.set("parameters", ps);
+    list.call<void>("push", e);
+  }
+  return list;
+}
+
+std::string version() { return "0.1.0"; }
+
+}  // namespace
+
+EMSCRIPTEN_BINDINGS(phex) {
+  emscripten::function("run", &run);
+  emscripten::function("surfaces", &surfaces);
+  emscripten::function("version", &version);
+}
