@@ -45,14 +45,18 @@ int integer(const val& o, const char* key) {
   return static_cast<int>(d);
 }
 
+std::string text(const val& o, const char* key) {
+  if (o[key].typeOf().as<std::string>() != "string")
+    throw phex::Error(phex::ErrorCode::InvalidParameter, std::string(key) + " must be a string");
+  return o[key].as<std::string>();
+}
+
 phex::PipelineParams paramsFromJs(const val& o) {
   if (o.typeOf().as<std::string>() != "object" || o.isNull())
     throw phex::Error(phex::ErrorCode::InvalidParameter, "params must be an object");
   phex::PipelineParams p;
   if (has(o, "surface")) {
-    if (o["surface"].typeOf().as<std::string>() != "string")
-      throw phex::Error(phex::ErrorCode::InvalidParameter, "surface must be a string");
-    p.surface = o["surface"].as<std::string>();
+    p.surface = text(o, "surface");
   }
   if (has(o, "surfaceParams")) {
     const val sp = o["surfaceParams"];
@@ -68,7 +72,8 @@ phex::PipelineParams paramsFromJs(const val& o) {
   if (has(o, "lambda")) p.lambda = number(o, "lambda");
   if (has(o, "mu")) p.mu = number(o, "mu");
   if (has(o, "maxIterations")) p.maxIterations = integer(o, "maxIterations");
-  if (has(o, "duality")) p.duality = phex::parseDuality(o["duality"].as<std::string>());
+  if (has(o, "duality")) p.duality = phex::parseDuality(text(o, "duality"));
+  if (has(o, "solver")) p.solver = phex::parseMethod(text(o, "solver"));
   return p;
 }
 
@@ -96,6 +101,9 @@ val resultToJs(const phex::PipelineResult& r) {
   metrics.set("planarityMax", m.planarityMax);
   metrics.set("planarityMean", m.planarityMean);
   metrics.set("selfIntersectingCount", m.selfIntersectingCount);
+  metrics.set("surfaceDistance", copyArray("Float64Array", m.surfaceDistance.data(), m.surfaceDistance.size()));
+  metrics.set("surfaceDistanceMax", m.surfaceDistanceMax);
+  metrics.set("surfaceDistanceMean", m.surfaceDistanceMean);
   out.set("metrics", metrics);
 
   val solve = val::object();
@@ -104,6 +112,7 @@ val resultToJs(const phex::PipelineResult& r) {
   solve.set("converged", r.solve.converged);
   solve.set("initialPlanarityMax", r.solve.initialPlanarityMax);
   solve.set("planarityMax", r.solve.planarityMax);
+  solve.set("displacementMax", r.solve.displacementMax);
   val log = val::array();
   for (const phex::IterationLog& it : r.solve.log) {
     val e = val::object();

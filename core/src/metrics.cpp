@@ -7,25 +7,6 @@
 namespace phex {
 namespace {
 
-struct FacePlane {
-  Vec3 centroid, normal;
-};
-
-FacePlane leastSquaresPlane(const PolyMesh& mesh, int face) {
-  const int n = mesh.faceSize(face);
-  const int* ids = mesh.face(face);
-  Vec3 c = Vec3::Zero();
-  for (int i = 0; i < n; ++i) c += mesh.vertex(ids[i]);
-  c /= n;
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (int i = 0; i < n; ++i) {
-    const Vec3 d = mesh.vertex(ids[i]) - c;
-    cov += d * d.transpose();
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-  return {c, es.eigenvectors().col(0)};
-}
-
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 bool onSegment(const Vec2& p, const Vec2& q, const Vec2& x) {
@@ -44,6 +25,21 @@ bool segmentsCross(const Vec2& p, const Vec2& q, const Vec2& r, const Vec2& s) {
 }
 
 }  // namespace
+
+FacePlane leastSquaresPlane(const PolyMesh& mesh, int face) {
+  const int n = mesh.faceSize(face);
+  const int* ids = mesh.face(face);
+  Vec3 c = Vec3::Zero();
+  for (int i = 0; i < n; ++i) c += mesh.vertex(ids[i]);
+  c /= n;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < n; ++i) {
+    const Vec3 d = mesh.vertex(ids[i]) - c;
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  return {c, es.eigenvectors().col(0)};
+}
 
 double facePlanarity(const PolyMesh& mesh, int face) {
   const int n = mesh.faceSize(face);
@@ -97,6 +93,21 @@ MeshMetrics measure(const PolyMesh& mesh) {
     m.selfIntersectingCount += m.selfIntersecting[f];
   }
   m.planarityMean = m.faceCount ? sum / m.faceCount : 0.0;
+  return m;
+}
+
+MeshMetrics measure(const PolyMesh& mesh, const Surface& surface) {
+  MeshMetrics m = measure(mesh);
+  const double diagonal = surface.bounds().diagonal().norm();
+  m.surfaceDistance.resize(m.vertexCount);
+  double sum = 0;
+  for (int v = 0; v < m.vertexCount; ++v) {
+    const Vec3 p = mesh.vertex(v);
+    m.surfaceDistance[v] = (surface.closestPoint(p).point - p).norm() / diagonal;
+    m.surfaceDistanceMax = std::max(m.surfaceDistanceMax, m.surfaceDistance[v]);
+    sum += m.surfaceDistance[v];
+  }
+  m.surfaceDistanceMean = m.vertexCount ? sum / m.vertexCount : 0.0;
   return m;
 }
 

@@ -81,6 +81,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   report("planarize", 0, "planarity optimization");
   r.hex = r.initial;
   PlanarizeOptions po;
+  po.method = params.solver;
   po.lambda = params.lambda;
   po.mu = params.mu;
   po.tolerance = params.tolerance;
@@ -90,7 +91,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   clock.done("planarize");
 
   report("measure", 0, "measuring");
-  r.metrics = measure(r.hex);
+  r.metrics = measure(r.hex, *surface);
   clock.done("measure");
   r.totalMilliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (progress) progress({"done", 1, "done"});

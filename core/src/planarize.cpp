@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 
@@ -27,6 +28,27 @@ class TetVolume final : public ceres::SizedCostFunction<1, 3, 3, 3, 3> {
       const Vec3 g[4] = {-(gb + gc + gd), gb, gc, gd};
       for (int k = 0; k < 4; ++k)
         if (jac[k]) store(jac[k], s_ * g[k]);
+    }
+    return true;
+  }
+
+ private:
+  double s_;
+};
+
+// s * (n . x - d): distance of vertex x from the face plane (n, d), n kept unit by a sphere manifold.
+class PlaneIncidence final : public ceres::SizedCostFunction<1, 3, 4> {
+ public:
+  explicit PlaneIncidence(double scale) : s_(scale) {}
+  bool Evaluate(double const* const* p, double* residual, double** jac) const override {
+    const Eigen::Map<const Vec3> x(p[0]), n(p[1]);
+    residual[0] = s_ * (n.dot(x) - p[1][3]);
+    if (jac) {
+      if (jac[0]) store(jac[0], s_ * n);
+      if (jac[1]) {
+        store(jac[1], s_ * x);
+        jac[1][3] = -s_;
+      }
     }
     return true;
   }
@@ -116,8 +138,136 @@ class RoundCallback final : public ceres::IterationCallback {
 
 }  // namespace
 
+// Block coordinate descent on E(x, planes) = Σ_f Σ_{v∈f} (n_f·x_v − d_f)² / h_f² + λ Σ_v |x_v − x0_v|² / h²
+// (+ μ Σ_v (n_s·(x_v − c_v))² / h²): the plane step fits each face's least-squares plane (exact minimizer
+// for fixed vertices) and the vertex step solves one 3x3 system per vertex (exact minimizer for fixed
+// planes, since a vertex's residuals involve no other vertex). E never increases; λ is divided by 10
+// per iteration as in §6.
+PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& options, const ProgressFn& progress,
+                                     const CancelFlag* cancel, PlanarizeReport report) {
+  using Clock = std::chrono::steady_clock;
+  const int nv = static_cast<int>(mesh.V.rows()), nf = mesh.faceCount();
+  const double h = mesh.meanEdgeLength();
+  const Points x0 = mesh.V;
+  std::vector<double> faceScale(nf, 0.0);  // 1 / h_f^2
+  std::vector<Vec3> normal(nf);
+  std::vector<double> offset(nf);
+  std::vector<std::vector<int>> vertexFaces(nv);
+  for (int f = 0; f < nf; ++f) {
+    const int n = mesh.faceSize(f);
+    if (n < 4) continue;
+    double hf = 0;
+    for (int i = 0; i < n; ++i) {
+      hf += (mesh.vertex(mesh.face(f)[i]) - mesh.vertex(mesh.face(f)[(i + 1) % n])).norm();
+      vertexFaces[mesh.face(f)[i]].push_back(f);
+    }
+    hf /= n;
+    faceScale[f] = 1.0 / (hf * hf);
+  }
+  // Fits the planes and returns the planarity max (largest |n·x − d| / h_f, which for least-squares
+  // planes is the facePlanarity measure).
+  double energy = 0;  // the objective after the last plane fit (without the μ term)
+  auto fitPlanes = [&]() {
+    double worst = 0;
+    energy = 0;
+    for (int f = 0; f < nf; ++f) {
+      if (faceScale[f] == 0) continue;
+      const FacePlane fp = leastSquaresPlane(mesh, f);
+      normal[f] = fp.normal;
+      offset[f] = fp.normal.dot(fp.centroid);
+      for (int i = 0; i < mesh.faceSize(f); ++i) {
+        const double r = (normal[f].dot(mesh.vertex(mesh.face(f)[i])) - offset[f]) * std::sqrt(faceScale[f]);
+        worst = std::max(worst, std::abs(r));
+        energy += r * r;
+      }
+    }
+    return worst;
+  };
+  std::vector<LocalGeometry> feet(options.mu > 0 ? nv : 0);
+  fitPlanes();
+  double lambda = options.lambda;
+  for (int it = 1; it <= options.maxIterations; ++it) {
+    checkCancel(cancel);
+    const auto t0 = Clock::now();
+    if (!feet.empty() && (it - 1) % 5 == 0)
+      for (int v = 0; v < nv; ++v) feet[v] = options.surface->closestPoint(mesh.vertex(v));
+    const double wl = lambda / (h * h), wm = options.mu / (h * h);
+    for (int v = 0; v < nv; ++v) {
+      Eigen::Matrix3d A = wl * Eigen::Matrix3d::Identity();
+      Vec3 b = wl * x0.row(v).transpose();
+      for (int f : vertexFaces[v]) {
+        A += faceScale[f] * normal[f] * normal[f].transpose();
+        b += faceScale[f] * offset[f] * normal[f];
+      }
+      if (wm > 0) {
+        A += wm * feet[v].normal * feet[v].normal.transpose();
+        b += wm * feet[v].normal.dot(feet[v].point) * feet[v].normal;
+      }
+      // Where the planes leave a direction free (λ → 0 at a parabolic vertex) the vertex keeps its place
+      // along it: solve for the displacement with a tiny relative Tikhonov term.
+      const Vec3 xv = mesh.vertex(v);
+      const double reg = 1e-12 * A.trace();
+      const Vec3 dx = (A + reg * Eigen::Matrix3d::Identity()).ldlt().solve(b - A * xv);
+      mesh.V.row(v) = (xv + dx).transpose();
+    }
+    const double planarity = fitPlanes();
+    IterationLog log;
+    log.round = it;
+    log.iteration = it;
+    log.lambda = lambda;
+    log.planarityMax = planarity;
+    log.objective = energy + lambda * (mesh.V - x0).squaredNorm() / (h * h);
+    log.milliseconds = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    report.log.push_back(log);
+    report.rounds = it;
+    if (progress) {
+      std::ostringstream msg;
+      msg << "iteration " << it << ", planarity " << planarity;
+      progress({"planarize", std::min(1.0, double(it) / options.maxIterations), msg.str()});
+    }
+    if (planarity <= options.tolerance) break;
+    lambda = lambda > 1e-30 ? lambda * 0.1 : 0.0;
+  }
+  report.planarityMax = maxPlanarity(mesh);
+  report.iterations = static_cast<int>(report.log.size());
+  report.converged = report.planarityMax <= options.tolerance;
+  return report;
+}
+
+const char* methodName(PlanarizeMethod m) {
+  switch (m) {
+    case PlanarizeMethod::Volumes: return "volumes";
+    case PlanarizeMethod::Planes: return "planes";
+    case PlanarizeMethod::LocalGlobal: return "local";
+  }
+  return "planes";
+}
+
+PlanarizeMethod parseMethod(const std::string& name) {
+  if (name == "volumes") return PlanarizeMethod::Volumes;
+  if (name == "planes") return PlanarizeMethod::Planes;
+  if (name == "local") return PlanarizeMethod::LocalGlobal;
+  throw Error(ErrorCode::InvalidParameter, "solver must be 'planes' or 'volumes' (got '" + name + "')");
+}
+
+namespace {
+PlanarizeReport solvePlanarity(PolyMesh& mesh, const PlanarizeOptions& options, const ProgressFn& progress,
+                               const CancelFlag* cancel);
+}  // namespace
+
 PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const ProgressFn& progress,
                           const CancelFlag* cancel) {
+  const Points initial = mesh.V;
+  PlanarizeReport report = solvePlanarity(mesh, options, progress, cancel);
+  const double h = mesh.meanEdgeLength();
+  if (h > 0 && mesh.V.rows() > 0) report.displacementMax = (mesh.V - initial).rowwise().norm().maxCoeff() / h;
+  return report;
+}
+
+namespace {
+
+PlanarizeReport solvePlanarity(PolyMesh& mesh, const PlanarizeOptions& options, const ProgressFn& progress,
+                               const CancelFlag* cancel) {
   if (!(options.tolerance > 0) || !std::isfinite(options.tolerance))
     throw Error(ErrorCode::InvalidParameter, "tolerance must be a positive number");
   if (!(options.lambda >= 0) || !std::isfinite(options.lambda)) throw Error(ErrorCode::InvalidParameter, "lambda must be >= 0");
@@ -130,6 +280,7 @@ PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const
   report.initialPlanarityMax = report.planarityMax = maxPlanarity(mesh);
   report.converged = report.planarityMax <= options.tolerance;
   if (report.converged) return report;
+  if (options.method == PlanarizeMethod::LocalGlobal) return planarizeLocalGlobal(mesh, options, progress, cancel, report);
 
   const int nv = static_cast<int>(mesh.V.rows());
   const double h = mesh.meanEdgeLength();
@@ -139,9 +290,16 @@ PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const
 
   ceres::Problem::Options po;
   po.enable_fast_removal = false;
+  po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(po);
-  for (int v = 0; v < nv; ++v) problem.AddParameterBlock(&x[3 * v], 3);
-  // F(f): every run of four consecutive vertices, volume scaled by the face's own edge length cubed.
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  for (int v = 0; v < nv; ++v) {
+    problem.AddParameterBlock(&x[3 * v], 3);
+    ordering->AddElementToGroup(&x[3 * v], 0);  // vertices are eliminated first (Schur complement)
+  }
+  ceres::ProductManifold<ceres::SphereManifold<3>, ceres::EuclideanManifold<1>> planeManifold;
+  std::vector<double> planes;
+  if (options.method == PlanarizeMethod::Planes) planes.resize(4 * static_cast<std::size_t>(mesh.faceCount()));
   for (int f = 0; f < mesh.faceCount(); ++f) {
     const int n = mesh.faceSize(f);
     if (n < 4) continue;
@@ -149,10 +307,22 @@ PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const
     double hf = 0;
     for (int i = 0; i < n; ++i) hf += (mesh.vertex(ids[i]) - mesh.vertex(ids[(i + 1) % n])).norm();
     hf /= n;
-    const double scale = 1.0 / (hf * hf * hf);
-    for (int i = 0; i < (n == 4 ? 1 : n); ++i)  // a quad's four quadruples are the same tetrahedron
-      problem.AddResidualBlock(new TetVolume(scale), nullptr, &x[3 * ids[i]], &x[3 * ids[(i + 1) % n]],
-                               &x[3 * ids[(i + 2) % n]], &x[3 * ids[(i + 3) % n]]);
+    if (options.method == PlanarizeMethod::Volumes) {
+      // F(f): every run of four consecutive vertices, volume scaled by the face's own edge length cubed.
+      const double scale = 1.0 / (hf * hf * hf);
+      for (int i = 0; i < (n == 4 ? 1 : n); ++i)  // a quad's four quadruples are the same tetrahedron
+        problem.AddResidualBlock(new TetVolume(scale), nullptr, &x[3 * ids[i]], &x[3 * ids[(i + 1) % n]],
+                                 &x[3 * ids[(i + 2) % n]], &x[3 * ids[(i + 3) % n]]);
+    } else {
+      // The face's least-squares plane starts it off; distances are relative to the face's edge length.
+      double* plane = &planes[4 * static_cast<std::size_t>(f)];
+      const FacePlane fp = leastSquaresPlane(mesh, f);
+      store(plane, fp.normal);
+      plane[3] = fp.normal.dot(fp.centroid);
+      problem.AddParameterBlock(plane, 4, &planeManifold);
+      ordering->AddElementToGroup(plane, 1);
+      for (int i = 0; i < n; ++i) problem.AddResidualBlock(new PlaneIncidence(1.0 / hf), nullptr, &x[3 * ids[i]], plane);
+    }
   }
   double closenessWeight = 0, distanceWeight = std::sqrt(options.mu) / h;
   for (int v = 0; v < nv; ++v) problem.AddResidualBlock(new Closeness(mesh.vertex(v), &closenessWeight), nullptr, &x[3 * v]);
@@ -171,7 +341,12 @@ PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const
     ceres::Solver::Options so;
     so.minimizer_type = ceres::TRUST_REGION;
     so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    if (options.method == PlanarizeMethod::Planes) {
+      so.linear_solver_type = ceres::SPARSE_SCHUR;
+      so.linear_solver_ordering = std::make_shared<ceres::ParameterBlockOrdering>(*ordering);
+    } else {
+      so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    }
     so.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
     so.num_threads = 1;
     so.max_num_iterations = 1;  // §6: one Gauss-Newton step per value of lambda
@@ -202,5 +377,7 @@ PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const
   report.converged = report.planarityMax <= options.tolerance;
   return report;
 }
+
+}  // namespace
 
 }  // namespace phex

@@ -30,6 +30,10 @@ Options of `phex run`:
   --mu M                    surface-distance weight (default 0)
   --max-iterations N        Gauss-Newton iteration cap (default 100)
   --duality dupin|tangent   initial hexagonal mesh: Dupin duality (default, §6) or tangent duality (§4.1)
+  --solver local|planes|volumes
+                            planarity solver: per-face planes by block coordinate descent (default,
+                            fastest), per-face planes by Gauss-Newton with Schur elimination (Ceres),
+                            or the paper's tetrahedron volumes by Gauss-Newton (Ceres, reference)
   --out FILE.obj            write the P-Hex mesh as OBJ
   --triangulation FILE.obj  write the triangulation as OBJ
   --initial FILE.obj        write the mesh before optimization as OBJ
@@ -69,7 +73,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                    {"objective", it.objective}, {"planarityMax", it.planarityMax}, {"milliseconds", it.milliseconds}});
   json params = {{"surface", p.surface}, {"surfaceParams", p.surfaceParams}, {"faces", p.faces}, {"cell", p.cell},
                  {"tolerance", p.tolerance}, {"lambda", p.lambda}, {"mu", p.mu}, {"maxIterations", p.maxIterations},
-                 {"duality", phex::dualityName(p.duality)}};
+                 {"duality", phex::dualityName(p.duality)}, {"solver", phex::methodName(p.solver)}};
   return {{"phex", "0.1.0"},
           {"params", params},
           {"triangulation", {{"vertices", r.triangulation.mesh.V.rows()}, {"triangles", r.triangulation.mesh.F.rows()}}},
@@ -77,6 +81,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"planarity", {{"max", r.metrics.planarityMax}, {"mean", r.metrics.planarityMean},
                          {"initialMax", r.solve.initialPlanarityMax}}},
           {"invalidFaces", r.metrics.selfIntersectingCount},
+          {"surfaceDistance", {{"max", r.metrics.surfaceDistanceMax}, {"mean", r.metrics.surfaceDistanceMean}}},
+          {"displacementMax", r.solve.displacementMax},
           {"dualFallbacks", r.dual.fallbackCount},
           {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
                       {"log", log}}},
@@ -106,6 +112,7 @@ int run(const std::vector<std::string>& args) {
     else if (a == "--mu") p.mu = parseNumber(a, value());
     else if (a == "--max-iterations") p.maxIterations = parseInt(a, value());
     else if (a == "--duality") p.duality = phex::parseDuality(value());
+    else if (a == "--solver") p.solver = phex::parseMethod(value());
     else if (a == "--out") out = value();
     else if (a == "--triangulation") tri = value();
     else if (a == "--initial") initial = value();

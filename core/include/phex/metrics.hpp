@@ -4,8 +4,15 @@
 #include <vector>
 
 #include "phex/mesh.hpp"
+#include "phex/surface.hpp"
 
 namespace phex {
+
+// Least-squares plane of a face's vertices: through their centroid, normal along the smallest principal axis.
+struct FacePlane {
+  Vec3 centroid, normal;
+};
+FacePlane leastSquaresPlane(const PolyMesh& mesh, int face);
 
 // Distance of the face's farthest vertex from its least-squares plane, divided by the face's mean edge length.
 double facePlanarity(const PolyMesh& mesh, int face);
@@ -21,8 +28,14 @@ struct MeshMetrics {
   double planarityMax = 0.0;
   double planarityMean = 0.0;
   int selfIntersectingCount = 0;
+  // Filled by measure(mesh, surface): vertex distance to the surface over the surface's bounding-box diagonal.
+  std::vector<double> surfaceDistance;    // #vertices
+  double surfaceDistanceMax = 0.0;
+  double surfaceDistanceMean = 0.0;
 };
 
 MeshMetrics measure(const PolyMesh& mesh);
+// Also measures how far the vertices are from `surface`.
+MeshMetrics measure(const PolyMesh& mesh, const Surface& surface);
 
 }  // namespace phex

@@ -24,6 +24,7 @@ struct PipelineParams {
   double mu = 0.0;                 // surface-distance weight, in [0, 1e6]
   int maxIterations = 100;         // Gauss-Newton iteration cap, 1 .. 10000
   Duality duality = Duality::Dupin;  // initializer of the optimization: Dupin (§6) or tangent (§4.1)
+  PlanarizeMethod solver = PlanarizeMethod::LocalGlobal;  // planarity solver (see planarize.hpp)
 };
 
 // "dupin" / "tangent" <-> Duality; parseDuality throws Error(InvalidParameter) for other names.

@@ -1,5 +1,6 @@
 // phex — planarity optimization (§6).
 #pragma once
+#include <string>
 #include <vector>
 
 #include "phex/mesh.hpp"
@@ -8,7 +9,26 @@
 
 namespace phex {
 
+// How the planarity condition enters the optimization.
+enum class PlanarizeMethod {
+  // §6 as published: F(f) = sum of squared tetrahedron volumes of consecutive vertex quadruples; the
+  // unknowns are the vertices only (the reference method).
+  Volumes,
+  // Each face gets its own plane (unit normal n_f, offset d_f) as extra unknowns and the residuals are
+  // the vertex-to-plane distances n_f . x - d_f. Zero residual means exactly the same thing (planar faces),
+  // but every residual touches one vertex and one plane, so Ceres eliminates the vertices by a Schur
+  // complement and factorizes a much smaller and sparser system over the planes.
+  Planes,
+  // The same per-face-plane energy minimized by block coordinate descent: least-squares planes for fixed
+  // vertices, then one 3x3 solve per vertex for fixed planes. No global factorization at all.
+  LocalGlobal
+};
+const char* methodName(PlanarizeMethod m);
+// "volumes" / "planes"; throws Error(InvalidParameter) for other names.
+PlanarizeMethod parseMethod(const std::string& name);
+
 struct PlanarizeOptions {
+  PlanarizeMethod method = PlanarizeMethod::LocalGlobal;
   double lambda = 1.0;        // closeness weight of F_s at the first round; divided by 10 each round (§6)
   double mu = 0.0;            // weight of F_d, the squared distance to the surface (needs `surface`)
   double tolerance = 1e-9;    // stop when max face planarity (relative to edge length) is at most this
@@ -31,6 +51,7 @@ struct PlanarizeReport {
   bool converged = false;   // planarityMax <= tolerance
   double initialPlanarityMax = 0.0;
   double planarityMax = 0.0;
+  double displacementMax = 0.0;  // largest vertex move from the initial mesh, over the mean edge length
   std::vector<IterationLog> log;
 };
 

@@ -1,0 +1,140 @@
+// phex — tests of the JavaScript API (build/pkg/phex.js) in Node, where the core runs in-thread.
+// Run: node --no-experimental-fetch --test tests/js/   (after `make wasm`)
+import assert from 'node:assert/strict';
+import { before, test } from 'node:test';
+import { createPHex, meshToOBJ, PHexError, triangulateFaces } from '../../build/pkg/phex.js';
+
+let phex;
+let torus; // the default torus result, shared by the tests that only read it
+const progress = [];
+
+before(async () => {
+  phex = await createPHex();
+  torus = await phex.run({ surface: 'torus', faces: 2000 }, { onProgress: (p) => progress.push(p) });
+});
+
+async function rejection(params, options) {
+  try {
+    await phex.run(params, options);
+  } catch (error) {
+    return error;
+  }
+  assert.fail(`run(${JSON.stringify(params)}) resolved`);
+}
+
+test('the default torus is a planar, valid, all-hexagon mesh', () => {
+  const { hex, metrics, solve, timings } = torus;
+  assert.ok(metrics.planarityMax <= 1e-9, `planarity max ${metrics.planarityMax}`);
+  assert.ok(solve.converged);
+  assert.equal(metrics.selfIntersectingCount, 0);
+  assert.deepEqual(Object.keys(metrics.facesBySize), ['6']);
+  assert.ok(metrics.faceCount > 1500 && metrics.faceCount < 2500, `face count ${metrics.faceCount}`);
+
+  assert.ok(hex.positions instanceof Float64Array);
+  assert.ok(hex.faceOffsets instanceof Uint32Array);
+  assert.equal(hex.positions.length, 3 * metrics.vertexCount);
+  assert.equal(hex.faceOffsets.length, metrics.faceCount + 1);
+  assert.equal(hex.faceIndices.length, hex.faceOffsets[metrics.faceCount]);
+  assert.ok(hex.faceIndices.every((v) => v < metrics.vertexCount));
+  assert.equal(metrics.planarity.length, metrics.faceCount);
+  assert.equal(metrics.selfIntersecting.length, metrics.faceCount);
+  assert.equal(Math.max(...metrics.planarity), metrics.planarityMax);
+  assert.equal(torus.triangulation.triangles.length % 3, 0);
+  assert.equal(torus.initial.faceOffsets.length, metrics.faceCount + 1);
+  for (const stage of ['triangulate', 'dualize', 'planarize', 'measure', 'total']) assert.ok(timings[stage] >= 0, stage);
+  assert.equal('ok' in torus, false);
+});
+
+test('progress is reported stage by stage', () => {
+  const stages = [...new Set(progress.map((p) => p.stage))];
+  for (const stage of ['triangulate', 'dualize', 'planarize', 'measure']) assert.ok(stages.includes(stage), stage);
+  for (const p of progress) {
+    assert.ok(p.fraction >= 0 && p.fraction <= 1, `fraction ${p.fraction}`);
+    assert.equal(typeof p.message, 'string');
+  }
+});
+
+test('surfaces() lists the analytic surfaces with their parameters', async () => {
+  const surfaces = await phex.surfaces();
+  const names = surfaces.map((s) => s.name);
+  assert.ok(names.includes('torus') && names.includes('sphere'), names.join());
+  for (const s of surfaces) {
+    assert.ok(s.description.length > 0);
+    for (const p of s.parameters) {
+      assert.equal(typeof p.name, 'string');
+      assert.ok(p.min <= p.default && p.default <= p.max, `${s.name}.${p.name}`);
+    }
+  }
+  surfaces[0].name = 'changed';
+  assert.notEqual((await phex.surfaces())[0].name, 'changed', 'callers get their own copy');
+  assert.match(phex.version, /^\d+\.\d+\.\d+/);
+});
+
+test('bad parameters reject with a PHexError naming them, and phex keeps working', async () => {
+  const cases = [
+    [{ surface: 'no-such-surface' }, /no-such-surface/],
+    [{ surface: 'torus', faces: 0 }, /faces/],
+    [{ surface: 'torus', faces: 1e9 }, /faces/],
+    [{ surface: 'torus', faces: 12.5 }, /faces/],
+    [{ surface: 'torus', faces: '2000' }, /faces/],
+    [{ surface: 'torus', tolerance: Number.NaN }, /tolerance/],
+    [{ surface: 'torus', duality: 'other' }, /duality/],
+    [{ surface: 'torus', surfaceParams: { R: 'big' } }, /surfaceParams\.R/],
+    [{ surface: 'torus', surfaceParams: { r: 2 } }, /\br\b/],
+    [{ surface: 'torus', facez: 10 }, /facez/],
+    [{ surface: 42 }, /surface/],
+    [{}, /surface/],
+    [null, /parameter object/],
+  ];
+  for (const [params, message] of cases) {
+    const error = await rejection(params);
+    assert.ok(error instanceof PHexError, `${JSON.stringify(params)}: ${error}`);
+    assert.equal(error.code, 'invalid_parameter', JSON.stringify(params));
+    assert.match(error.message, message, JSON.stringify(params));
+  }
+  const small = await phex.run({ surface: 'sphere', faces: 200 });
+  assert.ok(small.metrics.planarityMax <= 1e-9);
+  assert.equal(small.metrics.selfIntersectingCount, 0);
+});
+
+test('an aborted signal rejects with code cancelled', async () => {
+  const controller = new AbortController();
+  controller.abort();
+  const error = await rejection({ surface: 'torus', faces: 100 }, { signal: controller.signal });
+  assert.ok(error instanceof PHexError);
+  assert.equal(error.code, 'cancelled');
+});
+
+test('runs are queued and each resolves with its own result', async () => {
+  const [a, b] = await Promise.all([
+    phex.run({ surface: 'torus', faces: 100 }),
+    phex.run({ surface: 'sphere', faces: 150 }),
+  ]);
+  assert.ok(a.metrics.faceCount !== b.metrics.faceCount || a.hex.positions[0] !== b.hex.positions[0]);
+  assert.ok(a.metrics.planarityMax <= 1e-9 && b.metrics.planarityMax <= 1e-9);
+});
+
+test('triangulateFaces fans each polygon from its first corner', () => {
+  const square = { positions: new Float64Array([0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 2, 0, 0]), faceOffsets: new Uint32Array([0, 4, 7]), faceIndices: new Uint32Array([0, 1, 2, 3, 1, 4, 2]) };
+  const { positions, index, faceOfTriangle } = triangulateFaces(square);
+  assert.ok(positions instanceof Float32Array);
+  assert.deepEqual([...positions], [...square.positions]);
+  assert.deepEqual([...index], [0, 1, 2, 0, 2, 3, 1, 4, 2]);
+  assert.deepEqual([...faceOfTriangle], [0, 0, 1]);
+
+  const tri = triangulateFaces(torus.hex);
+  assert.equal(tri.faceOfTriangle.length, 4 * torus.metrics.faceCount); // hexagons: 4 triangles each
+  assert.equal(tri.index.length, 3 * tri.faceOfTriangle.length);
+});
+
+test('meshToOBJ writes the vertices and 1-based faces', () => {
+  const text = meshToOBJ(torus.hex);
+  const lines = text.trimEnd().split('\n');
+  assert.equal(lines.filter((l) => l.startsWith('v ')).length, torus.metrics.vertexCount);
+  const faces = lines.filter((l) => l.startsWith('f '));
+  assert.equal(faces.length, torus.metrics.faceCount);
+  const first = faces[0].split(' ').slice(1).map(Number);
+  const { faceOffsets, faceIndices } = torus.hex;
+  assert.deepEqual(first, [...faceIndices.subarray(faceOffsets[0], faceOffsets[1])].map((v) => v + 1));
+  assert.equal(Number(lines[1].split(' ')[1]), torus.hex.positions[0], 'full double precision');
+});

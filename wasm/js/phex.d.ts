@@ -1,0 +1,240 @@
+// phex — typings of the JavaScript API (phex.js). Lengths are in the model units of the surface.
+
+/** What kind of failure a {@link PHexError} reports. */
+export type PHexErrorCode =
+  /** A parameter has the wrong type or is out of its range; the message names it. */
+  | 'invalid_parameter'
+  /** A malformed mesh or file (bad counts, NaN, non-manifold, empty ...). */
+  | 'invalid_input'
+  /** The method cannot produce a valid P-Hex mesh for this surface or choice of parameters. */
+  | 'cannot_tile'
+  /** The run was cancelled through its AbortSignal, or the instance was disposed. */
+  | 'cancelled'
+  /** The wasm module or the worker could not be loaded. */
+  | 'io'
+  /** A bug in phex: please report it. */
+  | 'internal';
+
+/** Error of every failed phex call. */
+export class PHexError extends Error {
+  constructor(code: PHexErrorCode, message: string);
+  readonly name: 'PHexError';
+  /** What kind of failure this is. */
+  readonly code: PHexErrorCode;
+}
+
+/** A polygon mesh: vertices and faces of any size, stored flat. */
+export interface Mesh {
+  /** Vertex coordinates x, y, z of each vertex: length 3 × vertex count. */
+  positions: Float64Array;
+  /** Face f's corners are faceIndices[faceOffsets[f] .. faceOffsets[f + 1]): length face count + 1. */
+  faceOffsets: Uint32Array;
+  /** Vertex indices (0-based) of the face corners, in order around each face. */
+  faceIndices: Uint32Array;
+}
+
+/** The triangle mesh laid on the surface, whose dual is the hexagonal mesh. */
+export interface Triangulation {
+  /** Vertex coordinates: length 3 × vertex count. */
+  positions: Float64Array;
+  /** Vertex indices (0-based), three per triangle. */
+  triangles: Uint32Array;
+}
+
+/** Quality measures of the P-Hex mesh. */
+export interface Metrics {
+  /**
+   * Per face: the distance of its farthest corner from its least-squares plane, divided by the
+   * face's mean edge length (dimensionless; 0 for a perfectly planar face).
+   */
+  planarity: Float64Array;
+  /** Per face: 1 when two non-adjacent edges cross (seen in its plane) or an edge is degenerate (an invalid face), else 0. */
+  selfIntersecting: Uint8Array;
+  vertexCount: number;
+  faceCount: number;
+  /** Number of faces by number of corners, keyed by that number as a string: {"6": 1940, "5": 12, ...}. */
+  facesBySize: Record<string, number>;
+  /** Largest per-face planarity (dimensionless). */
+  planarityMax: number;
+  /** Mean per-face planarity (dimensionless). */
+  planarityMean: number;
+  /** Number of self-intersecting faces. */
+  selfIntersectingCount: number;
+  /** Per-vertex distance to the surface, divided by the surface's bounding-box diagonal (#V). */
+  surfaceDistance: Float64Array;
+  /** Largest and mean of `surfaceDistance`. */
+  surfaceDistanceMax: number;
+  surfaceDistanceMean: number;
+}
+
+/** One iteration of the planarity optimization. */
+export interface IterationLog {
+  /** Round number; the closeness weight lambda is divided by 10 between rounds. */
+  round: number;
+  /** Iteration number within the run. */
+  iteration: number;
+  /** Closeness weight used in this iteration. */
+  lambda: number;
+  /** Objective value after the iteration. */
+  objective: number;
+  /** Largest per-face planarity after the iteration (dimensionless). */
+  planarityMax: number;
+  /** Wall time of the iteration, in milliseconds. */
+  milliseconds: number;
+}
+
+/** How the planarity optimization went. */
+export interface SolveReport {
+  /** Solver iterations done, over all rounds (0 when the initial mesh was already planar). */
+  iterations: number;
+  rounds: number;
+  /** Whether the planarity goal (`tolerance`) was reached. */
+  converged: boolean;
+  /** Largest per-face planarity before optimization (dimensionless). */
+  initialPlanarityMax: number;
+  /** Largest per-face planarity after optimization (dimensionless). */
+  planarityMax: number;
+  /** Largest vertex move from the initial mesh, divided by the mean edge length. */
+  displacementMax: number;
+  log: IterationLog[];
+}
+
+/** Wall time of each stage, in milliseconds. */
+export interface Timings {
+  triangulate: number;
+  dualize: number;
+  planarize: number;
+  measure: number;
+  /** The whole run, including conversions. */
+  total: number;
+}
+
+/** What {@link PHex.run} resolves with. */
+export interface Result {
+  /** The P-Hex mesh: mostly hexagons with planar faces. */
+  hex: Mesh;
+  /** The dual mesh before the planarity optimization. */
+  initial: Mesh;
+  /** The triangulation the dual was taken of. */
+  triangulation: Triangulation;
+  /** Quality measures of `hex`. */
+  metrics: Metrics;
+  solve: SolveReport;
+  timings: Timings;
+  /** Number of dual vertices placed at their triangle's centroid because the duality was ill-posed there (near parabolic points). */
+  dualFallbacks: number;
+}
+
+/** Parameters of {@link PHex.run}. Only `surface` is required; the rest take the defaults shown. */
+export interface RunParams {
+  /** Name of an analytic surface, e.g. "torus" (see {@link PHex.surfaces}). */
+  surface: string;
+  /** Parameters of that surface by name; missing ones take their defaults (see {@link SurfaceParameter}). */
+  surfaceParams?: Record<string, number>;
+  /** Wanted number of hexagons, an integer in 12 .. 1 000 000. Default 2000. Ignored when `cell` > 0. */
+  faces?: number;
+  /** Wanted edge length of the triangulation, in model units; 0 means: derive it from `faces`. Default 0. */
+  cell?: number;
+  /** Planarity goal, relative to edge length (dimensionless), in (0, 0.1]. Default 1e-9. */
+  tolerance?: number;
+  /** Initial closeness weight, in [0, 1e6], divided by 10 every round. Default 1. */
+  lambda?: number;
+  /** Weight of the distance to the surface, in [0, 1e6]. Default 0. */
+  mu?: number;
+  /** Cap on solver iterations, an integer in 1 .. 10 000. Default 100. */
+  maxIterations?: number;
+  /**
+   * Initial dual mesh of the optimization: 'dupin' averages the centres of the Dupin conics of each
+   * triangle; 'tangent' intersects the tangent planes at its three vertices. Default 'dupin'.
+   */
+  duality?: 'dupin' | 'tangent';
+  /**
+   * Planarity solver. 'local' (default): per-face planes and vertices updated in turn, one small solve
+   * per vertex, the fastest. 'planes': the same energy by Gauss-Newton with Schur elimination (Ceres).
+   * 'volumes': the paper's tetrahedron-volume objective by Gauss-Newton (Ceres), the reference.
+   */
+  solver?: 'local' | 'planes' | 'volumes';
+}
+
+/** One progress report of a run. */
+export interface Progress {
+  /** The stage: "triangulate", "dualize", "planarize", "measure" or "done". */
+  stage: string;
+  /** Progress within the stage, 0 .. 1. */
+  fraction: number;
+  /** A human-readable line, e.g. "round 2, iteration 5, planarity 3.1e-07". */
+  message: string;
+}
+
+export interface RunOptions {
+  /** Called with each progress report (in browsers, forwarded from the worker). */
+  onProgress?: (progress: Progress) => void;
+  /**
+   * Aborting rejects the run with a PHexError of code 'cancelled'. In a worker the computation is
+   * stopped at once; in the calling thread a run that already started completes and is discarded.
+   */
+  signal?: AbortSignal;
+}
+
+/** A parameter of an analytic surface. */
+export interface SurfaceParameter {
+  name: string;
+  /** Value used when the parameter is not given. */
+  default: number;
+  /** Smallest accepted value. */
+  min: number;
+  /** Largest accepted value. */
+  max: number;
+  description: string;
+}
+
+/** An analytic surface phex can tile. */
+export interface SurfaceSpec {
+  /** The name to pass as {@link RunParams.surface}. */
+  name: string;
+  description: string;
+  parameters: SurfaceParameter[];
+}
+
+/** A loaded phex instance. */
+export interface PHex {
+  /**
+   * Computes a P-Hex mesh. Runs are done one after another in call order. Rejects with a
+   * PHexError: 'invalid_parameter' (the message names the parameter), 'cannot_tile', 'cancelled', ...
+   * The instance keeps working after any rejection.
+   */
+  run(params: RunParams, options?: RunOptions): Promise<Result>;
+  /** The analytic surfaces and their parameters. */
+  surfaces(): Promise<SurfaceSpec[]>;
+  /** Version of the phex core, e.g. "0.1.0". */
+  readonly version: string;
+  /** Stops the worker, if any; pending runs reject with code 'cancelled' and later calls fail. */
+  dispose(): void;
+}
+
+export interface CreateOptions {
+  /**
+   * Run the core in a module Web Worker, so computations never block the page. Default true where
+   * `Worker` exists (browsers); Node always runs in the calling thread.
+   */
+  worker?: boolean;
+}
+
+/** Loads the wasm core (next to this file) and resolves when it is ready. Rejects with code 'io' if it cannot be loaded. */
+export function createPHex(options?: CreateOptions): Promise<PHex>;
+
+/** A polygon mesh split into triangles for rendering. */
+export interface TriangulatedFaces {
+  /** Vertex coordinates in single precision: length 3 × vertex count (same vertices as the mesh). */
+  positions: Float32Array;
+  /** Vertex indices, three per triangle. */
+  index: Uint32Array;
+  /** For each triangle, the face of the mesh it belongs to. */
+  faceOfTriangle: Uint32Array;
+}
+
+/** Fan-triangulates each face (n corners → n − 2 triangles from its first corner), for THREE.BufferGeometry. */
+export function triangulateFaces(mesh: Mesh): TriangulatedFaces;
+
+/** The mesh as Wavefront OBJ text with full double precision, in the format of `phex run --out`. */
+export function meshToOBJ(mesh: Mesh): string;
