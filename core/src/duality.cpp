@@ -5,6 +5,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "phex/dupin.hpp"
 #include "phex/error.hpp"
 
 namespace phex {
@@ -117,28 +118,6 @@ DualMesh assembleDual(const TriMesh& T, const Points& U, int fallbacks) {
   return dual;
 }
 
-// Centre of the Dupin conic of `g` through g.point and the projections of a and b onto its tangent plane:
-// in the principal frame the conic is k1 (x - cx)^2 + k2 (y - cy)^2 = c, and subtracting its equation at
-// the three points leaves a 2x2 linear system for (cx, cy).
-bool dupinConicCenter(const LocalGeometry& g, const Vec3& a, const Vec3& b, Vec3& center) {
-  const Vec2 p(0, 0), q((a - g.point).dot(g.d1), (a - g.point).dot(g.d2)), r((b - g.point).dot(g.d1), (b - g.point).dot(g.d2));
-  Eigen::Matrix2d M;
-  Eigen::Vector2d rhs;
-  auto row = [&](int i, const Vec2& s, const Vec2& t) {
-    M(i, 0) = 2 * g.k1 * (s.x() - t.x());
-    M(i, 1) = 2 * g.k2 * (s.y() - t.y());
-    rhs(i) = g.k1 * (s.x() * s.x() - t.x() * t.x()) + g.k2 * (s.y() * s.y() - t.y() * t.y());
-  };
-  row(0, q, p);
-  row(1, r, p);
-  const double det = M.determinant();
-  const double scale = M.cwiseAbs().maxCoeff();
-  if (!(std::abs(det) > 1e-12 * scale * scale)) return false;
-  const Eigen::Vector2d c = M.inverse() * rhs;
-  center = g.point + c.x() * g.d1 + c.y() * g.d2;
-  return true;
-}
-
 }  // namespace
 
 DualMesh dupinDual(const Triangulation& tri, const ParametricSurface& surface) {
@@ -160,11 +139,13 @@ DualMesh dupinDual(const Triangulation& tri, const ParametricSurface& surface) {
     Vec3 x = fr.centroid;
     if (!parabolic) {
       // §6 steps 2-3: one conic centre per vertex, averaged.
-      Vec3 sum = Vec3::Zero(), center;
+      // The conic of vertex c passes through c itself and the vertical projections of the other two.
+      Vec3 sum = Vec3::Zero();
       bool ok = true;
       for (int c = 0; c < 3 && ok; ++c) {
-        ok = dupinConicCenter(*g[c], g[(c + 1) % 3]->point, g[(c + 2) % 3]->point, center);
-        sum += center;
+        const std::optional<Vec3> center = dupinCenter(*g[c], g[c]->point, g[(c + 1) % 3]->point, g[(c + 2) % 3]->point);
+        ok = center.has_value();
+        if (ok) sum += *center;
       }
       if (ok && plausible(sum / 3.0, fr)) x = sum / 3.0;
       else parabolic = true;

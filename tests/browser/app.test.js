@@ -100,7 +100,8 @@ test('a bad parameter shows an error, and the next valid edit works again', asyn
 });
 
 test('cancel stops a run and the page stays usable', async () => {
-  await page.fill('#faces', '20000');
+  // Large enough to still be running when Cancel is clicked.
+  await page.fill('#faces', '300000');
   await page.waitForSelector('body[data-state=running]');
   await page.click('#cancel');
   await page.waitForSelector('body[data-state=ready]', { timeout: 10_000 });
