@@ -6,7 +6,7 @@ export NODE_PATH := /usr/share/nodejs
 NODE := node --no-experimental-fetch
 PORT ?= 8080
 
-.PHONY: all setup native wasm web test test-native test-wasm test-js test-browser demo bench clean
+.PHONY: all setup native wasm web test test-native test-wasm test-cli test-js test-browser demo bench clean
 
 all: native wasm web
 
@@ -26,7 +26,7 @@ web: wasm
 	@npm run --silent build:web
 
 test: native wasm web
-	@$(MAKE) --no-print-directory test-native test-wasm test-js test-browser
+	@$(MAKE) --no-print-directory test-native test-wasm test-cli test-js test-browser
 
 test-native:
 	@echo "== Catch2, native (ctest)"
@@ -35,6 +35,10 @@ test-native:
 test-wasm:
 	@echo "== Catch2, WebAssembly (node)"
 	@cd build/wasm/tests && $(NODE) phex_tests.cjs
+
+test-cli:
+	@echo "== command line (node)"
+	@node --test tests/cli/
 
 test-js:
 	@echo "== JS API (node)"

@@ -1,5 +1,7 @@
 // phex — command-line tool: computes P-Hex meshes from the analytic surfaces.
 #include <phex/error.hpp>
+#include <phex/mesh_io.hpp>
+#include <phex/mesh_surface.hpp>
 #include <phex/pipeline.hpp>
 
 #include <cmath>
@@ -17,6 +19,7 @@ const char* kHelp = R"(phex — hexagonal meshes with planar faces (P-Hex meshes
 
 Usage:
   phex run [options]        compute a P-Hex mesh of a surface
+  phex curvature [options]  principal curvatures and directions per vertex, as CSV
   phex surfaces             list the analytic surfaces and their parameters
   phex --help | --version
 
@@ -39,6 +42,16 @@ Options of `phex run`:
   --initial FILE.obj        write the mesh before optimization as OBJ
   --report FILE.json        write counts, planarity, iterations and timings as JSON
   --quiet                   no progress on stderr
+
+Options of `phex curvature`:
+  --mesh FILE               a triangle mesh (OBJ, OFF, PLY or STL, ASCII or binary); curvature is
+                            estimated by jet fitting; rows follow the file's vertex order (STL: distinct
+                            corners in order of first appearance; unused vertices are left out)
+  --surface NAME            or an analytic surface (exact curvature), sampled on a regular lattice
+  --param NAME=VALUE        surface parameter (repeatable)
+  --faces N                 lattice size for --surface (default 2000 vertices)
+  --out FILE.csv            output, header x,y,z,k1,k2,d1x,d1y,d1z,d2x,d2y,d2z (k1 >= k2, unit d1, d2;
+                            curvature > 0 where the surface bends away from its outward/upward normal)
 
 Exit status: 0 on success, 1 when the input or a parameter is wrong (the message says which),
 2 when the result misses the planarity goal or has self-intersecting faces, 3 on internal errors.
@@ -141,6 +154,45 @@ int run(const std::vector<std::string>& args) {
   return (r.solve.converged && r.metrics.selfIntersectingCount == 0) ? 0 : 2;
 }
 
+int curvature(const std::vector<std::string>& args) {
+  std::string mesh, surface, out;
+  phex::SurfaceParams params;
+  int faces = 2000;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    auto value = [&]() -> const std::string& {
+      if (i + 1 >= args.size()) usage(a + " needs a value");
+      return args[++i];
+    };
+    if (a == "--mesh") mesh = value();
+    else if (a == "--surface") surface = value();
+    else if (a == "--param") {
+      const std::string& kv = value();
+      const auto eq = kv.find('=');
+      if (eq == std::string::npos || eq == 0) usage("--param expects NAME=VALUE, got '" + kv + "'");
+      params[kv.substr(0, eq)] = parseNumber("--param " + kv.substr(0, eq), kv.substr(eq + 1));
+    } else if (a == "--faces") faces = parseInt(a, value());
+    else if (a == "--out") out = value();
+    else usage("unknown option '" + a + "'");
+  }
+  if (mesh.empty() == surface.empty()) usage("phex curvature needs exactly one of --mesh FILE or --surface NAME");
+  if (out.empty()) usage("phex curvature needs --out FILE.csv");
+  if (faces < 12 || faces > phex::kMaxFaces) usage("--faces must be between 12 and " + std::to_string(phex::kMaxFaces));
+  phex::writeTextFile(out, "");  // fail on an unwritable output before the work
+  std::vector<phex::LocalGeometry> rows;
+  if (!mesh.empty()) {
+    const phex::MeshSurface s(phex::readMesh(mesh), mesh);
+    rows = s.vertexGeometries();
+  } else {
+    const phex::SurfacePtr s = phex::makeSurface(surface, params);
+    const phex::Triangulation t = phex::latticeTriangulation(*s, phex::cellForFaceCount(*s, faces));
+    for (const phex::Vec2& uv : t.uv) rows.push_back(s->geometryAt(uv.x(), uv.y()));
+  }
+  phex::writeTextFile(out, phex::curvatureCsv(rows));
+  std::cout << rows.size() << " vertices\n";
+  return 0;
+}
+
 int surfaces() {
   for (const auto& s : phex::analyticSurfaces()) {
     std::cout << s.name << " — " << s.description << "\n";
@@ -165,6 +217,7 @@ int main(int argc, char** argv) {
     args.erase(args.begin());
     if (cmd == "run") return run(args);
     if (cmd == "surfaces") return surfaces();
+    if (cmd == "curvature") return curvature(args);
     usage("unknown command '" + cmd + "'");
   } catch (const phex::Error& e) {
     std::cerr << "phex: error: " << e.what() << "\n";

@@ -1,0 +1,77 @@
+// phex — an uploaded triangle mesh as a Surface (§6: S given as a triangle mesh).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "phex/mesh.hpp"
+#include "phex/surface.hpp"
+
+namespace phex {
+
+// A triangle mesh seen as a smooth surface:
+// - at each vertex, the shape operator is estimated by fitting a cubic jet z(x, y) (a degree-3 height
+//   function, falling back to degree 2 where too few points) in the frame of the vertex normal, over
+//   the smallest k-ring (k >= 2) with at least kMinJetPoints vertices, weighted by distance. The normal is
+//   re-estimated from the fit; boundary vertices fit their one-sided neighbourhood the same way;
+// - inside a triangle, the vertices' normals and 3D shape tensors (k1 d1 d1^T + k2 d2 d2^T) are
+//   interpolated barycentrically and the tensor is restricted to the tangent plane of the interpolated
+//   normal before its eigen-decomposition, so curvatures and directions vary smoothly (eigenvectors are
+//   never interpolated, they flip sign and swap);
+// - closest points are found through an AABB tree over the triangles.
+// Normals follow the triangles' orientation (CCW seen from the normal side).
+class MeshSurface : public Surface {
+ public:
+  static constexpr int kMinJetPoints = 16;
+
+  // `mesh` must be clean (as readMesh / cleanTriMesh return it): throws Error(InvalidInput) for no
+  // triangles, an index out of range, a non-finite coordinate, an edge used twice in the same direction
+  // or by more than two triangles, or a vertex where two boundaries meet.
+  //   mesh.V  #V by 3 positions (any unit); mesh.F  #F by 3 vertex ids.
+  explicit MeshSurface(TriMesh mesh, std::string name = "mesh");
+
+  std::string name() const override { return name_; }
+  // Nearest point over all triangles, with the interpolated geometry there.
+  LocalGeometry closestPoint(const Vec3& p) const override;
+  Box3 bounds() const override { return bounds_; }
+  bool isClosed() const override { return boundaryLoops_.empty(); }
+
+  const TriMesh& mesh() const { return mesh_; }
+  int vertexCount() const { return static_cast<int>(mesh_.V.rows()); }
+  // The estimated geometry at vertex i (point = the vertex).
+  const LocalGeometry& vertexGeometry(int i) const { return vertexGeometry_[i]; }
+  const std::vector<LocalGeometry>& vertexGeometries() const { return vertexGeometry_; }
+  // Geometry at barycentric coordinates (b0, b1, b2), summing to 1, of triangle f.
+  LocalGeometry geometryInTriangle(int f, const Vec3& barycentric) const;
+  // Each boundary loop as vertex ids in order, the surface on the left (following the triangles' edges).
+  const std::vector<std::vector<int>>& boundaryLoops() const { return boundaryLoops_; }
+  bool isBoundaryVertex(int i) const { return onBoundary_[i] != 0; }
+
+ private:
+  struct Node {
+    Box3 box;
+    int first = 0;  // leaf: first index into triangleOrder_; inner: index of the left child (right = first + 1)
+    int count = 0;  // leaf: number of triangles; 0 for an inner node
+  };
+  void buildTopology();
+  void estimateCurvature();
+  void buildTree();
+
+  TriMesh mesh_;
+  std::string name_;
+  Box3 bounds_;
+  std::vector<int> neighbourStart_, neighbours_;  // vertex adjacency in compressed rows
+  std::vector<char> onBoundary_;
+  std::vector<std::vector<int>> boundaryLoops_;
+  std::vector<LocalGeometry> vertexGeometry_;
+  std::vector<Eigen::Matrix3d> shapeTensor_;  // k1 d1 d1^T + k2 d2 d2^T per vertex
+  std::vector<Node> nodes_;
+  std::vector<int> triangleOrder_;
+};
+
+// `phex curvature` output: one row per entry of `rows` (for a MeshSurface, its vertexGeometries(), in the
+// order of surface.mesh(): the file's vertex order less the vertices no kept triangle uses; STL: distinct
+// corners in order of first appearance; MeshReadReport::fileVertex maps each row back to the file), as
+// CSV with the header `x,y,z,k1,k2,d1x,d1y,d1z,d2x,d2y,d2z` (17 significant digits).
+std::string curvatureCsv(const std::vector<LocalGeometry>& rows);
+
+}  // namespace phex

@@ -1,0 +1,360 @@
+#include "phex/mesh_surface.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numeric>
+
+#include <Eigen/Cholesky>
+
+#include "phex/error.hpp"
+
+namespace phex {
+namespace {
+
+[[noreturn]] void fail(const std::string& name, const std::string& what) {
+  throw Error(ErrorCode::InvalidInput, "mesh '" + name + "': " + what);
+}
+
+// Principal curvatures and directions of the shape tensor T restricted to the tangent plane of `normal`.
+// The 2x2 symmetric eigenproblem is solved in closed form, so the result is the same on every platform.
+LocalGeometry principalFrame(const Vec3& point, const Vec3& normal, const Eigen::Matrix3d& T) {
+  LocalGeometry g;
+  g.point = point;
+  g.normal = normal;
+  const Vec3 u = normal.unitOrthogonal(), v = normal.cross(u);
+  const double a = u.dot(T * u), c = v.dot(T * v), b = 0.5 * (u.dot(T * v) + v.dot(T * u));
+  const double mean = 0.5 * (a + c), radius = std::hypot(0.5 * (a - c), b);
+  g.k1 = mean + radius;
+  g.k2 = mean - radius;
+  const double angle = 0.5 * std::atan2(2 * b, a - c);  // direction of the larger eigenvalue
+  g.d1 = std::cos(angle) * u + std::sin(angle) * v;
+  g.d2 = normal.cross(g.d1);
+  return g;
+}
+
+// The point of triangle abc nearest to p, as barycentric coordinates (Ericson, Real-Time Collision
+// Detection, 5.1.5): the Voronoi regions of the vertices, then of the edges, then the face.
+Vec3 closestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return Vec3(1, 0, 0);
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return Vec3(0, 1, 0);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double t = d1 / (d1 - d3);
+    return Vec3(1 - t, t, 0);
+  }
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return Vec3(0, 0, 1);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double t = d2 / (d2 - d6);
+    return Vec3(1 - t, 0, t);
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return Vec3(0, 1 - t, t);
+  }
+  const double denom = 1 / (va + vb + vc);
+  const double v = vb * denom, w = vc * denom;
+  return Vec3(1 - v - w, v, w);
+}
+
+// A jet z(x, y) fitted around a vertex: the normal and the 3D shape tensor it gives at the vertex.
+struct JetFit {
+  bool ok = false;
+  Vec3 normal;
+  Eigen::Matrix3d tensor;
+};
+
+// Fits z = sum c_ij x^i y^j (i + j <= 3, or 2) to `local` (x, y, z in the frame whose third axis is the
+// trial normal), weighted by a Gaussian of the distance. The fitted surface is a graph (x, y, f(x, y)):
+// with J = [X_x X_y], metric G = J^T J and second fundamental form B = -Hess f / sqrt(1 + |grad f|^2)
+// (sign: k > 0 bending away from the normal), the shape tensor on 3D tangent vectors is
+// J G^-1 B G^-1 J^T.
+template <int m>  // 10 coefficients: cubic; 6: quadratic (fixed sizes: no allocation per vertex)
+JetFit fitJet(const std::vector<Vec3>& local) {
+  JetFit fit;
+  const int n = static_cast<int>(local.size());
+  if (n < m + 2) return fit;
+  double radius2 = 0;
+  for (const Vec3& q : local) radius2 = std::max(radius2, q.x() * q.x() + q.y() * q.y());
+  if (!(radius2 > 0)) return fit;
+  const double scale = 1 / std::sqrt(radius2);  // monomials of x / h keep the normal equations well conditioned
+  Eigen::Matrix<double, m, m> A = Eigen::Matrix<double, m, m>::Zero();
+  Eigen::Matrix<double, m, 1> rhs = Eigen::Matrix<double, m, 1>::Zero();
+  for (int i = 0; i < n; ++i) {
+    const double x = local[i].x() * scale, y = local[i].y() * scale;
+    const double all[10] = {1, x, y, x * x, x * y, y * y, x * x * x, x * x * y, x * y * y, y * y * y};
+    const Eigen::Map<const Eigen::Matrix<double, m, 1>> row(all);
+    const double w = std::exp(-(x * x + y * y));  // nearer points count more: the jet is a local model
+    A.template selfadjointView<Eigen::Lower>().rankUpdate(row, w);
+    rhs += (w * local[i].z() * scale) * row;
+  }
+  const Eigen::LDLT<Eigen::Matrix<double, m, m>, Eigen::Lower> ldlt(A);
+  if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-10)) return fit;
+  const Eigen::Matrix<double, m, 1> c = ldlt.solve(rhs);
+  // Back to unscaled derivatives at the origin: f_x = c1, f_xx = 2 c3 s, ... (z was scaled too).
+  const double fx = c(1), fy = c(2), fxx = 2 * c(3) * scale, fxy = c(4) * scale, fyy = 2 * c(5) * scale;
+  Eigen::Matrix<double, 3, 2> J;
+  J << 1, 0, 0, 1, fx, fy;
+  const double root = std::sqrt(1 + fx * fx + fy * fy);
+  Eigen::Matrix2d B;
+  B << -fxx, -fxy, -fxy, -fyy;
+  B /= root;
+  const Eigen::Matrix2d Ginv = (J.transpose() * J).inverse();
+  fit.tensor = J * Ginv * B * Ginv * J.transpose();
+  fit.normal = Vec3(-fx, -fy, 1) / root;
+  fit.ok = std::isfinite(fit.tensor.sum()) && fit.normal.allFinite();
+  return fit;
+}
+
+}  // namespace
+
+MeshSurface::MeshSurface(TriMesh mesh, std::string name) : mesh_(std::move(mesh)), name_(std::move(name)) {
+  const int nv = vertexCount(), nf = static_cast<int>(mesh_.F.rows());
+  if (nf == 0) fail(name_, "has no triangles");
+  if (!mesh_.V.allFinite()) fail(name_, "has a coordinate that is not finite");
+  if (mesh_.F.minCoeff() < 0 || mesh_.F.maxCoeff() >= nv)
+    fail(name_, "a triangle refers to a vertex out of range (" + std::to_string(nv) + " vertices)");
+  for (int v = 0; v < nv; ++v) bounds_.extend(Vec3(mesh_.V.row(v).transpose()));
+  buildTopology();
+  estimateCurvature();
+  buildTree();
+}
+
+void MeshSurface::buildTopology() {
+  const int nv = vertexCount(), nf = static_cast<int>(mesh_.F.rows());
+  // Triangles around each vertex, in compressed rows.
+  std::vector<int> start(nv + 1, 0), around(3 * static_cast<std::size_t>(nf));
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) ++start[mesh_.F(f, k) + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) around[fill[mesh_.F(f, k)]++] = f;
+  }
+  // Neighbouring vertices; each edge a->b must appear once, and b->a at most once (else non-manifold).
+  neighbourStart_.assign(nv + 1, 0);
+  neighbours_.clear();
+  neighbours_.reserve(6 * static_cast<std::size_t>(nv) + 6);
+  std::vector<int> boundaryNext(nv, -1);
+  onBoundary_.assign(nv, 0);
+  std::vector<int> ring;
+  for (int a = 0; a < nv; ++a) {
+    ring.clear();
+    for (int i = start[a]; i < start[a + 1]; ++i) {
+      const int f = around[i];
+      int k = 0;
+      while (mesh_.F(f, k) != a) ++k;
+      const int b = mesh_.F(f, (k + 1) % 3);
+      ring.push_back(b);
+      ring.push_back(mesh_.F(f, (k + 2) % 3));
+      int forward = 0, backward = 0;
+      for (int j = start[a]; j < start[a + 1]; ++j) {
+        const int g = around[j];
+        for (int c = 0; c < 3; ++c) {
+          forward += mesh_.F(g, c) == a && mesh_.F(g, (c + 1) % 3) == b;
+          backward += mesh_.F(g, c) == b && mesh_.F(g, (c + 1) % 3) == a;
+        }
+      }
+      if (forward > 1 || backward > 1)
+        fail(name_, "the edge from vertex " + std::to_string(a) + " to " + std::to_string(b) +
+                        " is non-manifold or inconsistently oriented (clean the mesh with cleanTriMesh first)");
+      if (backward == 0) {
+        if (boundaryNext[a] >= 0)
+          fail(name_, "vertex " + std::to_string(a) + " is where two boundaries meet (a non-manifold vertex)");
+        boundaryNext[a] = b;
+        onBoundary_[a] = onBoundary_[b] = 1;
+      }
+    }
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    neighbours_.insert(neighbours_.end(), ring.begin(), ring.end());
+    neighbourStart_[a + 1] = static_cast<int>(neighbours_.size());
+  }
+  // Boundary loops follow the boundary edges in the triangles' direction.
+  boundaryLoops_.clear();
+  std::vector<char> visited(nv, 0);
+  for (int v = 0; v < nv; ++v) {
+    if (boundaryNext[v] < 0 || visited[v]) continue;
+    std::vector<int> loop;
+    for (int a = v; !visited[a]; a = boundaryNext[a]) {
+      visited[a] = 1;
+      loop.push_back(a);
+      if (boundaryNext[a] < 0) fail(name_, "the boundary through vertex " + std::to_string(a) + " does not close");
+    }
+    boundaryLoops_.push_back(std::move(loop));
+  }
+}
+
+void MeshSurface::estimateCurvature() {
+  const int nv = vertexCount(), nf = static_cast<int>(mesh_.F.rows());
+  // Area-weighted normals: the trial frame of each fit, oriented like the triangles.
+  std::vector<Vec3> trialNormal(nv, Vec3::Zero());
+  for (int f = 0; f < nf; ++f) {
+    const Vec3 a = mesh_.V.row(mesh_.F(f, 0)), b = mesh_.V.row(mesh_.F(f, 1)), c = mesh_.V.row(mesh_.F(f, 2));
+    const Vec3 n = (b - a).cross(c - a);
+    for (int k = 0; k < 3; ++k) trialNormal[mesh_.F(f, k)] += n;
+  }
+  vertexGeometry_.resize(nv);
+  shapeTensor_.resize(nv);
+  std::vector<int> stamp(nv, -1), patch;
+  std::vector<Vec3> local;
+  for (int v = 0; v < nv; ++v) {
+    // The smallest k-ring, k >= 2, with enough points for a cubic jet (capped for safety).
+    patch.assign(1, v);
+    stamp[v] = v;
+    std::size_t ringBegin = 0;
+    for (int rings = 1; rings <= 8; ++rings) {
+      const std::size_t ringEnd = patch.size();
+      for (std::size_t i = ringBegin; i < ringEnd; ++i)
+        for (int j = neighbourStart_[patch[i]]; j < neighbourStart_[patch[i] + 1]; ++j) {
+          const int w = neighbours_[j];
+          if (stamp[w] != v) stamp[w] = v, patch.push_back(w);
+        }
+      ringBegin = ringEnd;
+      if (patch.size() == ringEnd || (rings >= 2 && static_cast<int>(patch.size()) >= kMinJetPoints)) break;
+    }
+    const Vec3 p = mesh_.V.row(v);
+    Vec3 normal = trialNormal[v].norm() > 0 ? trialNormal[v].normalized() : Vec3::UnitZ();
+    Eigen::Matrix3d tensor = Eigen::Matrix3d::Zero();
+    // Two passes at most: a fit whose normal is far from the trial normal is refitted in its own frame.
+    for (int pass = 0; pass < 2; ++pass) {
+      const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
+      local.clear();
+      for (int w : patch) {
+        const Vec3 d = Vec3(mesh_.V.row(w)) - p;
+        local.emplace_back(d.dot(t1), d.dot(t2), d.dot(normal));
+      }
+      JetFit fit = fitJet<10>(local);
+      if (!fit.ok) fit = fitJet<6>(local);
+      if (!fit.ok) break;  // too few points (a tiny mesh): keep the trial normal, zero curvature
+      Eigen::Matrix3d R;
+      R << t1, t2, normal;
+      tensor = R * fit.tensor * R.transpose();
+      const Vec3 fitted = R * fit.normal;
+      const bool refit = fitted.dot(normal) < 0.995;  // about 6 degrees
+      normal = fitted;
+      if (!refit) break;
+    }
+    shapeTensor_[v] = tensor;
+    vertexGeometry_[v] = principalFrame(p, normal, tensor);
+  }
+}
+
+LocalGeometry MeshSurface::geometryInTriangle(int f, const Vec3& barycentric) const {
+  Vec3 point = Vec3::Zero(), normal = Vec3::Zero();
+  Eigen::Matrix3d tensor = Eigen::Matrix3d::Zero();
+  for (int k = 0; k < 3; ++k) {
+    const int v = mesh_.F(f, k);
+    point += barycentric(k) * mesh_.V.row(v).transpose();
+    normal += barycentric(k) * vertexGeometry_[v].normal;
+    tensor += barycentric(k) * shapeTensor_[v];
+  }
+  if (!(normal.norm() > 1e-12)) {  // opposite vertex normals (a fold): use the triangle's own normal
+    const Vec3 a = mesh_.V.row(mesh_.F(f, 0)), b = mesh_.V.row(mesh_.F(f, 1)), c = mesh_.V.row(mesh_.F(f, 2));
+    normal = (b - a).cross(c - a);
+  }
+  return principalFrame(point, normal.normalized(), tensor);
+}
+
+void MeshSurface::buildTree() {
+  const int nf = static_cast<int>(mesh_.F.rows());
+  std::vector<Vec3> centroid(nf);
+  for (int f = 0; f < nf; ++f)
+    centroid[f] = (mesh_.V.row(mesh_.F(f, 0)) + mesh_.V.row(mesh_.F(f, 1)) + mesh_.V.row(mesh_.F(f, 2))).transpose() / 3;
+  triangleOrder_.resize(nf);
+  std::iota(triangleOrder_.begin(), triangleOrder_.end(), 0);
+  nodes_.clear();
+  nodes_.reserve(static_cast<std::size_t>(nf));
+  nodes_.emplace_back();
+  struct Task {
+    int node, begin, end;
+  };
+  std::vector<Task> tasks{{0, 0, nf}};
+  constexpr int kLeafSize = 4;
+  while (!tasks.empty()) {
+    const Task t = tasks.back();
+    tasks.pop_back();
+    Box3 box, centres;
+    for (int i = t.begin; i < t.end; ++i) {
+      const int f = triangleOrder_[i];
+      for (int k = 0; k < 3; ++k) box.extend(Vec3(mesh_.V.row(mesh_.F(f, k)).transpose()));
+      centres.extend(centroid[f]);
+    }
+    nodes_[t.node].box = box;
+    if (t.end - t.begin <= kLeafSize) {
+      nodes_[t.node].first = t.begin;
+      nodes_[t.node].count = t.end - t.begin;
+      continue;
+    }
+    // Median split along the longest side of the centroids' box: a balanced tree, depth log2(#F / 4).
+    int axis;
+    centres.sizes().maxCoeff(&axis);
+    const int mid = (t.begin + t.end) / 2;
+    std::nth_element(triangleOrder_.begin() + t.begin, triangleOrder_.begin() + mid, triangleOrder_.begin() + t.end,
+                     [&](int a, int b) { return centroid[a](axis) < centroid[b](axis); });
+    const int left = static_cast<int>(nodes_.size());
+    nodes_[t.node].first = left;
+    nodes_[t.node].count = 0;
+    nodes_.emplace_back();
+    nodes_.emplace_back();
+    tasks.push_back({left, t.begin, mid});
+    tasks.push_back({left + 1, mid, t.end});
+  }
+}
+
+LocalGeometry MeshSurface::closestPoint(const Vec3& p) const {
+  double best = std::numeric_limits<double>::infinity();
+  int bestTriangle = 0;
+  Vec3 bestBarycentric(1, 0, 0);
+  int stack[128];  // the tree is balanced: depth <= 25 for kMaxMeshTriangles, two entries per level
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[stack[--top]];
+    if (node.box.squaredExteriorDistance(p) >= best) continue;
+    if (node.count > 0) {
+      for (int i = node.first; i < node.first + node.count; ++i) {
+        const int f = triangleOrder_[i];
+        const Vec3 a = mesh_.V.row(mesh_.F(f, 0)), b = mesh_.V.row(mesh_.F(f, 1)), c = mesh_.V.row(mesh_.F(f, 2));
+        const Vec3 bary = closestBarycentric(p, a, b, c);
+        const double d = (bary(0) * a + bary(1) * b + bary(2) * c - p).squaredNorm();
+        if (d < best) best = d, bestTriangle = f, bestBarycentric = bary;
+      }
+      continue;
+    }
+    // Nearer child on top, so it is searched first and prunes the other.
+    const double dl = nodes_[node.first].box.squaredExteriorDistance(p);
+    const double dr = nodes_[node.first + 1].box.squaredExteriorDistance(p);
+    if (dl <= dr) {
+      stack[top++] = node.first + 1;
+      stack[top++] = node.first;
+    } else {
+      stack[top++] = node.first;
+      stack[top++] = node.first + 1;
+    }
+  }
+  return geometryInTriangle(bestTriangle, bestBarycentric);
+}
+
+std::string curvatureCsv(const std::vector<LocalGeometry>& rows) {
+  std::string out = "x,y,z,k1,k2,d1x,d1y,d1z,d2x,d2y,d2z\n";
+  char buf[512];
+  for (const LocalGeometry& r : rows) {
+    std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", r.point.x(),
+                  r.point.y(), r.point.z(), r.k1, r.k2, r.d1.x(), r.d1.y(), r.d1.z(), r.d2.x(), r.d2.y(), r.d2.z());
+    out += buf;
+  }
+  return out;
+}
+
+}  // namespace phex

@@ -1,0 +1,102 @@
+// The command-line tool, run as a user would: outputs, reports and errors with exit codes.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { spawnSync } from 'node:child_process';
+import { mkdtempSync, readFileSync, writeFileSync, existsSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+
+const PHEX = new URL('../../build/native/bin/phex', import.meta.url).pathname;
+const dir = mkdtempSync(join(tmpdir(), 'phex-cli-'));
+
+function phex(...args) {
+  const r = spawnSync(PHEX, args, { encoding: 'utf8' });
+  return { code: r.status, out: r.stdout, err: r.stderr };
+}
+
+test('--help documents the commands and options', () => {
+  const r = phex('--help');
+  assert.equal(r.code, 0);
+  for (const word of ['run', 'curvature', 'surfaces', '--faces', '--cell', '--report', '--solver', '--duality']) {
+    assert.ok(r.out.includes(word), `help mentions ${word}`);
+  }
+});
+
+test('run writes the P-Hex mesh as OBJ and a JSON report', () => {
+  const obj = join(dir, 'hex.obj');
+  const report = join(dir, 'report.json');
+  const r = phex('run', '--surface', 'torus', '--faces', '2000', '--out', obj, '--report', report, '--quiet');
+  assert.equal(r.code, 0, r.err);
+  const rep = JSON.parse(readFileSync(report, 'utf8'));
+  assert.ok(rep.planarity.max <= 1e-9);
+  assert.equal(rep.invalidFaces, 0);
+  assert.ok(rep.mesh.facesBySize['6'] > 1500);
+  assert.ok(rep.solver.iterations >= 1);
+  for (const stage of ['triangulate', 'dualize', 'planarize', 'measure', 'total']) assert.ok(rep.milliseconds[stage] >= 0);
+  const faces = readFileSync(obj, 'utf8').split('\n').filter((l) => l.startsWith('f ')).length;
+  assert.equal(faces, rep.mesh.faces);
+});
+
+test('--cell is an alternative to --faces', () => {
+  const report = join(dir, 'cell.json');
+  assert.equal(phex('run', '--surface', 'sphere', '--cell', '0.2', '--report', report, '--quiet').code, 0);
+  assert.ok(JSON.parse(readFileSync(report, 'utf8')).mesh.faces > 50);
+});
+
+test('bad input gives a message and exit code 1', () => {
+  const cases = [
+    [['run', '--surface', 'teapot'], /unknown surface 'teapot'/],
+    [['run', '--faces', '0'], /faces must be between/],
+    [['run', '--faces', '5000000000'], /--faces expects an integer|faces must be between/],
+    [['run', '--faces', 'many'], /--faces expects a number/],
+    [['run', '--tolerance', 'nan'], /--tolerance expects a number/],
+    [['run', '--out', join(dir, 'no/such/dir/hex.obj')], /cannot open .*no\/such\/dir/],
+    [['run', '--solver', 'magic'], /solver must be/],
+    [['run', '--param', 'R'], /NAME=VALUE/],
+    [['frobnicate'], /unknown command/],
+    [['curvature', '--mesh', join(dir, 'missing.obj'), '--out', join(dir, 'c.csv')], /missing\.obj/],
+  ];
+  for (const [args, pattern] of cases) {
+    const r = phex(...args);
+    assert.equal(r.code, 1, `${args.join(' ')} exits 1`);
+    assert.match(r.err, pattern, args.join(' '));
+  }
+});
+
+test('curvature of an uploaded mesh keeps the vertex order; bad files are named', () => {
+  // A small height field z = (x^2 - y^2) / 2 as OBJ.
+  const n = 12;
+  let obj = '';
+  for (let j = 0; j <= n; j++) for (let i = 0; i <= n; i++) {
+    const x = (i / n - 0.5) * 0.6, y = (j / n - 0.5) * 0.6;
+    obj += `v ${x} ${y} ${(x * x - y * y) / 2}\n`;
+  }
+  for (let j = 0; j < n; j++) for (let i = 0; i < n; i++) {
+    const a = j * (n + 1) + i + 1;
+    obj += `f ${a} ${a + 1} ${a + n + 2}\nf ${a} ${a + n + 2} ${a + n + 1}\n`;
+  }
+  const input = join(dir, 'saddle.obj'), out = join(dir, 'saddle.csv');
+  writeFileSync(input, obj);
+  const r = phex('curvature', '--mesh', input, '--out', out);
+  assert.equal(r.code, 0, r.err);
+  const rows = readFileSync(out, 'utf8').trim().split('\n');
+  assert.equal(rows[0], 'x,y,z,k1,k2,d1x,d1y,d1z,d2x,d2y,d2z');
+  assert.equal(rows.length, (n + 1) * (n + 1) + 1);
+  const centre = rows[1 + (n / 2) * (n + 1) + n / 2].split(',').map(Number);
+  assert.ok(Math.abs(centre[0]) < 1e-12 && Math.abs(centre[1]) < 1e-12);
+  assert.ok(Math.abs(centre[3] - 1) < 0.05 && Math.abs(centre[4] + 1) < 0.05, `k1, k2 at the saddle: ${centre[3]}, ${centre[4]}`);
+
+  const bad = join(dir, 'bad.obj');
+  writeFileSync(bad, 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n');
+  const e = phex('curvature', '--mesh', bad, '--out', join(dir, 'bad.csv'));
+  assert.equal(e.code, 1);
+  assert.match(e.err, /bad\.obj.*line 4/);
+  assert.ok(!existsSync(join(dir, 'bad.csv')) || readFileSync(join(dir, 'bad.csv'), 'utf8') === '');
+});
+
+test('curvature of an analytic surface is exact', () => {
+  const out = join(dir, 'sphere.csv');
+  assert.equal(phex('curvature', '--surface', 'sphere', '--param', 'R=2', '--faces', '200', '--out', out).code, 0);
+  const rows = readFileSync(out, 'utf8').trim().split('\n').slice(1).map((l) => l.split(',').map(Number));
+  for (const r of rows) assert.ok(Math.abs(r[3] - 0.5) < 1e-12 && Math.abs(r[4] - 0.5) < 1e-12);
+});

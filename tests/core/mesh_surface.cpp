@@ -1,0 +1,324 @@
+#include <catch.hpp>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+
+#include "phex/error.hpp"
+#include "phex/mesh_io.hpp"
+#include "phex/mesh_surface.hpp"
+#include "phex/surfaces.hpp"
+
+using namespace phex;
+
+namespace {
+
+constexpr double kPi = 3.141592653589793;
+
+// z = A sin(w x) cos(w y) over [-2, 2]^2: elliptic bumps, hyperbolic saddles and parabolic curves between.
+class WavySheet : public ParametricSurface {
+ public:
+  std::string name() const override { return "wavy-sheet"; }
+  Domain domain() const override { return {-2, 2, -2, 2, false, false}; }
+  Jet jet(double x, double y) const override {
+    const double s = std::sin(w * x), c = std::cos(w * x), sy = std::sin(w * y), cy = std::cos(w * y);
+    Jet j;
+    j.P = Vec3(x, y, A * s * cy);
+    j.Pu = Vec3(1, 0, A * w * c * cy);
+    j.Pv = Vec3(0, 1, -A * w * s * sy);
+    j.Puu = Vec3(0, 0, -A * w * w * s * cy);
+    j.Puv = Vec3(0, 0, -A * w * w * c * sy);
+    j.Pvv = Vec3(0, 0, -A * w * w * s * cy);
+    return j;
+  }
+  double A = 0.5, w = 1.5;
+};
+
+// Deterministic noise in [-1, 1) (the same on every platform, unlike <random>'s distributions).
+double noise(std::uint32_t i, std::uint32_t salt) {
+  std::uint32_t h = i * 2654435761u ^ (salt + 0x9e3779b9u);
+  h ^= h >> 15, h *= 2246822519u, h ^= h >> 13, h *= 3266489917u, h ^= h >> 16;
+  return h / 2147483648.0 - 1.0;
+}
+
+// A triangle mesh of `surface` on an nu x nv grid of its domain, the parameters of every vertex jittered
+// by up to `jitter` steps (boundary vertices only along the boundary) and each cell's diagonal chosen at
+// random among those that keep both triangles unfolded, so neighbourhoods are irregular. Triangles are
+// counter-clockwise in (u, v), so they face like Pu x Pv, the surface's normal.
+struct Sampled {
+  TriMesh mesh;
+  std::vector<LocalGeometry> exact;  // the surface's geometry at each vertex
+  std::vector<bool> interior;        // at least 4 grid steps from an open side of the domain
+};
+
+Sampled sample(const ParametricSurface& surface, int nu, int nv, double jitter) {
+  const ParametricSurface::Domain d = surface.domain();
+  const int cu = d.periodicU ? nu : nu + 1, cv = d.periodicV ? nv : nv + 1;
+  const double du = (d.u1 - d.u0) / nu, dv = (d.v1 - d.v0) / nv;
+  Sampled s;
+  s.mesh.V.resize(cu * cv, 3);
+  std::vector<Vec2> offset(cu * cv);  // jitter in grid steps
+  auto id = [&](int i, int j) { return (i % cu) * cv + (j % cv); };
+  for (int i = 0; i < cu; ++i)
+    for (int j = 0; j < cv; ++j) {
+      const int v = id(i, j);
+      const bool edgeU = !d.periodicU && (i == 0 || i == nu), edgeV = !d.periodicV && (j == 0 || j == nv);
+      offset[v] = Vec2(edgeU ? 0 : jitter * noise(v, 1), edgeV ? 0 : jitter * noise(v, 2));
+      const LocalGeometry g = surface.geometryAt(d.u0 + du * (i + offset[v].x()), d.v0 + dv * (j + offset[v].y()));
+      s.mesh.V.row(v) = g.point.transpose();
+      s.exact.push_back(g);
+      s.interior.push_back((d.periodicU || (i >= 4 && i <= nu - 4)) && (d.periodicV || (j >= 4 && j <= nv - 4)));
+    }
+  std::vector<int> tri;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const int ids[4] = {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)};
+      Vec2 q[4];
+      const int corner[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+      for (int k = 0; k < 4; ++k) q[k] = Vec2(i + corner[k][0], j + corner[k][1]) + offset[ids[k]];
+      auto area = [&](int a, int b, int c) {
+        const Vec2 x = q[b] - q[a], y = q[c] - q[a];
+        return x.x() * y.y() - x.y() * y.x();
+      };
+      const int split[2][6] = {{0, 1, 2, 0, 2, 3}, {0, 1, 3, 1, 2, 3}};
+      int choice = noise(ids[0], 3) > 0;
+      auto valid = [&](int c) { return area(split[c][0], split[c][1], split[c][2]) > 0.05 && area(split[c][3], split[c][4], split[c][5]) > 0.05; };
+      if (!valid(choice)) choice = 1 - choice;
+      REQUIRE(valid(choice));
+      for (int k = 0; k < 6; ++k) tri.push_back(ids[split[choice][k]]);
+    }
+  s.mesh.F = Eigen::Map<const Triangles>(tri.data(), static_cast<Eigen::Index>(tri.size() / 3), 3);
+  return s;
+}
+
+double quantile(std::vector<double> x, double q) {
+  REQUIRE(!x.empty());
+  std::sort(x.begin(), x.end());
+  return x[static_cast<std::size_t>(q * (x.size() - 1))];
+}
+
+// Relative curvature errors are taken against max(|k|, 5% of the largest |k| on the test set), so that
+// near-parabolic points (k ~ 0) are measured against the surface's scale and not against zero.
+// Direction errors (degrees, modulo 180) are taken where |k1 - k2| exceeds 10% of that scale.
+struct Accuracy {
+  double curvatureMedian, curvature95, directionMedian, direction95;
+  std::size_t directionSamples;
+};
+
+Accuracy accuracy(const Sampled& s, const MeshSurface& m) {
+  double scale = 0;
+  for (std::size_t v = 0; v < s.exact.size(); ++v)
+    if (s.interior[v]) scale = std::max({scale, std::abs(s.exact[v].k1), std::abs(s.exact[v].k2)});
+  std::vector<double> kErr, dErr;
+  for (std::size_t v = 0; v < s.exact.size(); ++v) {
+    if (!s.interior[v]) continue;
+    const LocalGeometry& e = s.exact[v];
+    const LocalGeometry& g = m.vertexGeometry(static_cast<int>(v));
+    REQUIRE(g.normal.dot(e.normal) > 0.99);
+    kErr.push_back(std::abs(g.k1 - e.k1) / std::max(std::abs(e.k1), 0.05 * scale));
+    kErr.push_back(std::abs(g.k2 - e.k2) / std::max(std::abs(e.k2), 0.05 * scale));
+    if (e.k1 - e.k2 > 0.1 * scale)
+      dErr.push_back(std::acos(std::min(1.0, std::abs(g.d1.dot(e.d1)))) * 180 / kPi);
+  }
+  Accuracy a{quantile(kErr, 0.5), quantile(kErr, 0.95), 0, 0, dErr.size()};
+  if (!dErr.empty()) a.directionMedian = quantile(dErr, 0.5), a.direction95 = quantile(dErr, 0.95);
+  return a;
+}
+
+void checkAccuracy(const ParametricSurface& surface, int nu, int nv, bool testDirections) {
+  const Sampled s = sample(surface, nu, nv, 0.3);
+  const MeshSurface m(s.mesh, surface.name());
+  const Accuracy a = accuracy(s, m);
+  INFO(surface.name() << ": " << s.mesh.V.rows() << " vertices, curvature error median " << a.curvatureMedian
+                      << " p95 " << a.curvature95 << ", direction error median " << a.directionMedian << " deg p95 "
+                      << a.direction95 << " deg over " << a.directionSamples << " vertices");
+  CHECK(s.mesh.V.rows() > 15000);
+  CHECK(a.curvatureMedian <= 0.01);
+  CHECK(a.curvature95 <= 0.05);
+  if (testDirections) {
+    CHECK(a.directionSamples > 1000);
+    CHECK(a.directionMedian <= 2.0);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("mesh_surface: curvature of a jittered sphere band (K > 0, umbilic)") {
+  checkAccuracy(*makeSurface("sphere", {{"R", 2.0}}), 160, 125, false);
+}
+
+TEST_CASE("mesh_surface: curvature and directions of a jittered torus (K > 0 and K < 0, closed)") {
+  checkAccuracy(*makeSurface("torus"), 250, 80, true);
+}
+
+TEST_CASE("mesh_surface: curvature and directions of a jittered hyperbolic paraboloid (K < 0)") {
+  checkAccuracy(*makeSurface("hyperbolic-paraboloid"), 141, 141, true);
+}
+
+TEST_CASE("mesh_surface: curvature and directions of a jittered wavy sheet (mixed K, parabolic curves)") {
+  checkAccuracy(WavySheet(), 141, 141, true);
+}
+
+TEST_CASE("mesh_surface: curvature and directions of a jittered cylinder (K = 0)") {
+  checkAccuracy(*makeSurface("cylinder"), 200, 100, true);
+}
+
+TEST_CASE("mesh_surface: normals follow the triangles, also at the boundary") {
+  const Sampled s = sample(*makeSurface("hyperbolic-paraboloid"), 40, 40, 0.3);
+  const MeshSurface m(s.mesh);
+  for (int v = 0; v < m.vertexCount(); ++v) CHECK(m.vertexGeometry(v).normal.dot(s.exact[v].normal) > 0.99);
+  // Reversing every triangle reverses the normals and the curvature signs.
+  TriMesh flipped = s.mesh;
+  flipped.F.col(1).swap(flipped.F.col(2));
+  const MeshSurface r(flipped);
+  for (int v : {0, 500, 900}) {
+    CHECK(r.vertexGeometry(v).normal.dot(m.vertexGeometry(v).normal) == Approx(-1.0));
+    CHECK(r.vertexGeometry(v).k1 == Approx(-m.vertexGeometry(v).k2));
+  }
+}
+
+TEST_CASE("mesh_surface: closest point lands on the mesh with interpolated geometry") {
+  const SurfacePtr torus = makeSurface("torus");
+  const Sampled s = sample(*torus, 250, 80, 0.3);
+  const MeshSurface m(s.mesh, "torus");
+  std::vector<double> kErr;
+  for (int i = 0; i < 300; ++i) {
+    const double u = kPi * (1 + noise(i, 7)), v = kPi * (1 + noise(i, 8)), off = 0.05 * noise(i, 9);
+    const LocalGeometry e = torus->geometryAt(u, v);
+    const LocalGeometry g = m.closestPoint(e.point + off * e.normal);
+    // On the mesh, which is within the chordal error (edge^2 k / 8 ~ 4e-4) of the torus, near the exact foot.
+    CHECK(std::abs(std::hypot(std::hypot(g.point.x(), g.point.y()) - 1.0, g.point.z()) - 0.4) < 1e-3);
+    CHECK((g.point - e.point).norm() < 5e-3);
+    CHECK(g.normal.dot(e.normal) > 0.999);
+    CHECK(std::abs(g.d1.dot(g.normal)) < 1e-12);
+    CHECK(g.d1.cross(g.d2).dot(g.normal) == Approx(1.0));
+    kErr.push_back(std::abs(g.k1 - e.k1) / 2.5);
+    kErr.push_back(std::abs(g.k2 - e.k2) / 2.5);
+  }
+  CHECK(quantile(kErr, 0.5) < 0.01);
+  CHECK(quantile(kErr, 0.95) < 0.05);
+  // Brute force agrees with the tree.
+  for (int i = 0; i < 20; ++i) {
+    const Vec3 p(1.5 * noise(i, 10), 1.5 * noise(i, 11), 0.6 * noise(i, 12));
+    double best = 1e300;
+    for (int f = 0; f < m.mesh().F.rows(); ++f) {
+      const Vec3 q = m.geometryInTriangle(f, Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3)).point;
+      best = std::min(best, (q - p).norm());
+    }
+    CHECK((m.closestPoint(p).point - p).norm() <= best + 1e-12);
+  }
+}
+
+TEST_CASE("mesh_surface: inside a triangle the shape tensor is interpolated, not the eigenvectors") {
+  const Sampled s = sample(WavySheet(), 60, 60, 0.3);
+  const MeshSurface m(s.mesh);
+  for (int f = 0; f < m.mesh().F.rows(); f += 97) {
+    // At a corner: the vertex's own geometry (d1 up to sign).
+    const int v = m.mesh().F(f, 0);
+    const LocalGeometry corner = m.geometryInTriangle(f, Vec3(1, 0, 0));
+    CHECK(corner.k1 == Approx(m.vertexGeometry(v).k1).margin(1e-9));
+    CHECK(std::abs(corner.d1.dot(m.vertexGeometry(v).d1)) == Approx(1.0).margin(1e-6));
+    // Along an edge the mean curvature is the interpolated trace: linear in the parameter, up to the
+    // restriction to the (interpolated) tangent plane.
+    const LocalGeometry mid = m.geometryInTriangle(f, Vec3(0.5, 0.5, 0));
+    const double h0 = m.vertexGeometry(v).meanCurvature(), h1 = m.vertexGeometry(m.mesh().F(f, 1)).meanCurvature();
+    CHECK(mid.meanCurvature() == Approx(0.5 * (h0 + h1)).margin(5e-3));
+  }
+  // Directions turn smoothly along a path crossing many triangles (away from umbilics, where they may spin).
+  LocalGeometry previous = m.closestPoint(Vec3(-1.5, -0.3, 0));
+  int checked = 0;
+  for (int i = 1; i <= 200; ++i) {
+    const LocalGeometry g = m.closestPoint(Vec3(-1.5 + 3.0 * i / 200, -0.3, 0));
+    if (g.k1 - g.k2 > 0.3 && previous.k1 - previous.k2 > 0.3) {
+      CHECK(std::abs(g.d1.dot(previous.d1)) > std::cos(5 * kPi / 180));
+      ++checked;
+    }
+    previous = g;
+  }
+  CHECK(checked > 100);
+}
+
+TEST_CASE("mesh_surface: boundary loops, closedness and bounds") {
+  const Sampled torus = sample(*makeSurface("torus"), 30, 12, 0.2);
+  const MeshSurface t(torus.mesh);
+  CHECK(t.isClosed());
+  CHECK(t.boundaryLoops().empty());
+  CHECK(t.bounds().max().x() == Approx(1.4).epsilon(0.02));
+  CHECK(t.bounds().max().z() == Approx(0.4).epsilon(0.05));
+
+  const Sampled band = sample(*makeSurface("sphere"), 30, 12, 0.2);  // periodic in u: two boundary circles
+  const MeshSurface b(band.mesh);
+  CHECK_FALSE(b.isClosed());
+  REQUIRE(b.boundaryLoops().size() == 2);
+  for (const std::vector<int>& loop : b.boundaryLoops()) {
+    CHECK(loop.size() == 30);
+    for (std::size_t i = 0; i < loop.size(); ++i) {
+      CHECK(b.isBoundaryVertex(loop[i]));
+      // Consecutive loop vertices share a triangle edge in the triangle's direction (surface on the left).
+      const int a = loop[i], c = loop[(i + 1) % loop.size()];
+      bool found = false;
+      for (int f = 0; f < b.mesh().F.rows(); ++f)
+        for (int k = 0; k < 3; ++k) found |= b.mesh().F(f, k) == a && b.mesh().F(f, (k + 1) % 3) == c;
+      CHECK(found);
+    }
+  }
+  const Sampled sheet = sample(WavySheet(), 10, 10, 0.2);
+  const MeshSurface w(sheet.mesh);
+  REQUIRE(w.boundaryLoops().size() == 1);
+  CHECK(w.boundaryLoops()[0].size() == 40);
+}
+
+TEST_CASE("mesh_surface: bad meshes are rejected with a message") {
+  TriMesh m;
+  m.V = Points::Zero(3, 3);
+  m.V(1, 0) = 1;
+  m.V(2, 1) = 1;
+  m.F.resize(0, 3);
+  CHECK_THROWS_WITH(MeshSurface(m, "empty"), Catch::Contains("'empty'") && Catch::Contains("no triangles"));
+  m.F.resize(1, 3);
+  m.F << 0, 1, 3;
+  CHECK_THROWS_WITH(MeshSurface(m), Catch::Contains("out of range"));
+  m.F << 0, 1, 2;
+  m.V(2, 2) = std::nan("");
+  CHECK_THROWS_WITH(MeshSurface(m), Catch::Contains("not finite"));
+  m.V(2, 2) = 0;
+  m.F.resize(2, 3);
+  m.F << 0, 1, 2, 0, 1, 2;  // the same triangle twice: every edge used twice in one direction
+  CHECK_THROWS_WITH(MeshSurface(m), Catch::Contains("inconsistently oriented"));
+  try {
+    MeshSurface bad(m);
+  } catch (const Error& e) {
+    CHECK(e.code() == ErrorCode::InvalidInput);
+  }
+}
+
+TEST_CASE("mesh_surface: the curvature table keeps the file's vertex order") {
+  // An OBJ whose first vertex is unused: rows follow the file order without it.
+  const Sampled s = sample(WavySheet(), 20, 20, 0.2);
+  std::string obj = "v 100 100 100\n" + toObj(s.mesh);
+  for (std::size_t at = obj.find("\nf "); at != std::string::npos; at = obj.find("\nf ", at + 1)) {
+    // Shift every face index by one for the extra vertex.
+    std::size_t end = obj.find('\n', at + 1);
+    std::string line = obj.substr(at + 3, end - at - 3), shifted;
+    std::size_t p = 0;
+    while (p < line.size()) {
+      std::size_t q = line.find(' ', p);
+      if (q == std::string::npos) q = line.size();
+      shifted += (shifted.empty() ? "" : " ") + std::to_string(std::stoi(line.substr(p, q - p)) + 1);
+      p = q + 1;
+    }
+    obj.replace(at + 3, end - at - 3, shifted);
+  }
+  MeshReadReport report;
+  const TriMesh mesh = readMeshBytes(reinterpret_cast<const std::uint8_t*>(obj.data()), obj.size(), "obj", "sheet.obj", &report);
+  const MeshSurface m(mesh, "sheet");
+  const std::vector<LocalGeometry>& rows = m.vertexGeometries();
+  REQUIRE(rows.size() == static_cast<std::size_t>(s.mesh.V.rows()));
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    CHECK(report.fileVertex[i] == static_cast<int>(i) + 1);
+    CHECK(rows[i].point == Vec3(s.mesh.V.row(i).transpose()));
+  }
+  const std::string csv = curvatureCsv(rows);
+  CHECK(csv.rfind("x,y,z,k1,k2,d1x,d1y,d1z,d2x,d2y,d2z\n", 0) == 0);
+  CHECK(std::count(csv.begin(), csv.end(), '\n') == static_cast<long>(rows.size()) + 1);
+}
