@@ -64,12 +64,6 @@ VertexRings vertexRings(const TriMesh& mesh) {
 
 namespace {
 
-std::vector<LocalGeometry> vertexGeometry(const Triangulation& tri, const ParametricSurface& surface) {
-  std::vector<LocalGeometry> geo(tri.uv.size());
-  for (std::size_t v = 0; v < geo.size(); ++v) geo[v] = surface.geometryAt(tri.uv[v].x(), tri.uv[v].y());
-  return geo;
-}
-
 struct TriangleFrame {
   Vec3 centroid = Vec3::Zero();
   double longestEdge = 0;
@@ -120,7 +114,7 @@ DualMesh assembleDual(const TriMesh& T, const Points& U, int fallbacks) {
 
 }  // namespace
 
-DualMesh dupinDual(const Triangulation& tri, const ParametricSurface& surface) {
+DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
   const TriMesh& T = tri.mesh;
   const int nf = static_cast<int>(T.F.rows());
   const std::vector<LocalGeometry> geo = vertexGeometry(tri, surface);
@@ -156,7 +150,7 @@ DualMesh dupinDual(const Triangulation& tri, const ParametricSurface& surface) {
   return assembleDual(T, U, fallbacks);
 }
 
-DualMesh tangentDual(const Triangulation& tri, const ParametricSurface& surface) {
+DualMesh tangentDual(const Triangulation& tri, const Surface& surface) {
   const TriMesh& T = tri.mesh;
   const int nf = static_cast<int>(T.F.rows());
   const std::vector<LocalGeometry> geo = vertexGeometry(tri, surface);

@@ -54,19 +54,10 @@ double facePlanarity(const PolyMesh& mesh, int face) {
   return edges > 0 ? maxDist / (edges / n) : 0.0;
 }
 
-bool faceSelfIntersects(const PolyMesh& mesh, int face) {
-  const int n = mesh.faceSize(face);
-  const int* ids = mesh.face(face);
-  const FacePlane pl = leastSquaresPlane(mesh, face);
-  const Vec3 ex = (std::abs(pl.normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(pl.normal).normalized();
-  const Vec3 ey = pl.normal.cross(ex);
-  std::vector<Vec2> p(n);
+bool polygonSelfIntersects(const std::vector<Vec2>& p) {
+  const int n = static_cast<int>(p.size());
   double scale = 0;
-  for (int i = 0; i < n; ++i) {
-    const Vec3 d = mesh.vertex(ids[i]) - pl.centroid;
-    p[i] = Vec2(d.dot(ex), d.dot(ey));
-    scale = std::max(scale, p[i].norm());
-  }
+  for (const Vec2& q : p) scale = std::max(scale, q.norm());
   for (int i = 0; i < n; ++i)
     if ((p[i] - p[(i + 1) % n]).norm() <= 1e-12 * scale) return true;  // degenerate edge
   for (int i = 0; i < n; ++i)
@@ -75,6 +66,20 @@ bool faceSelfIntersects(const PolyMesh& mesh, int face) {
       if (segmentsCross(p[i], p[(i + 1) % n], p[k], p[(k + 1) % n])) return true;
     }
   return false;
+}
+
+bool faceSelfIntersects(const PolyMesh& mesh, int face) {
+  const int n = mesh.faceSize(face);
+  const int* ids = mesh.face(face);
+  const FacePlane pl = leastSquaresPlane(mesh, face);
+  const Vec3 ex = (std::abs(pl.normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(pl.normal).normalized();
+  const Vec3 ey = pl.normal.cross(ex);
+  std::vector<Vec2> p(n);
+  for (int i = 0; i < n; ++i) {
+    const Vec3 d = mesh.vertex(ids[i]) - pl.centroid;
+    p[i] = Vec2(d.dot(ex), d.dot(ey));
+  }
+  return polygonSelfIntersects(p);
 }
 
 MeshMetrics measure(const PolyMesh& mesh) {

@@ -53,7 +53,7 @@ void validate(const PipelineParams& p) {
 
 PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
   validate(params);
-  const SurfacePtr surface = makeSurface(params.surface, params.surfaceParams);
+  const ParametricSurfacePtr surface = makeSurface(params.surface, params.surfaceParams);
   const auto t0 = std::chrono::steady_clock::now();
   PipelineResult r;
   StageClock clock(r.timings);

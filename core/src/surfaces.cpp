@@ -29,7 +29,7 @@ class AnalyticSurface final : public ParametricSurface {
   JetFunction jet_;
 };
 
-SurfacePtr analytic(std::string name, ParametricSurface::Domain domain, AnalyticSurface::JetFunction jet) {
+ParametricSurfacePtr analytic(std::string name, ParametricSurface::Domain domain, AnalyticSurface::JetFunction jet) {
   return std::make_shared<AnalyticSurface>(std::move(name), domain, std::move(jet));
 }
 
@@ -46,7 +46,7 @@ struct Profile {
 // Pu x Pv = rho (z' cos u, z' sin u, -rho'): the normal lies to the right of the meridian (rho, z), so it
 // points outward when the meridian rises (z' > 0) or runs counterclockwise around the enclosed tube.
 // A closed meridian (a torus) makes v periodic too.
-SurfacePtr revolution(std::string name, double v0, double v1, std::function<Profile(double)> profile,
+ParametricSurfacePtr revolution(std::string name, double v0, double v1, std::function<Profile(double)> profile,
                       bool closedMeridian = false) {
   return analytic(std::move(name), {0, 2 * kPi, v0, v1, true, closedMeridian}, [profile](double u, double v) {
     const Profile p = profile(v);
@@ -69,7 +69,7 @@ struct Height {
 };
 
 // Height field over the square [-size/2, size/2]^2 with (u, v) = (x, y); Pu x Pv = (-zx, -zy, 1) points up.
-SurfacePtr heightField(std::string name, double size, std::function<Height(double, double)> f) {
+ParametricSurfacePtr heightField(std::string name, double size, std::function<Height(double, double)> f) {
   const double h = 0.5 * size;
   return analytic(std::move(name), {-h, h, -h, h, false, false}, [f](double x, double y) {
     const Height z = f(x, y);
@@ -86,7 +86,7 @@ SurfacePtr heightField(std::string name, double size, std::function<Height(doubl
 
 // Ellipsoid with semi-axes (a, b, c) (the sphere when equal), P = diag(a, b, c) (cos v cos u, cos v sin u, sin v),
 // trimmed to |v| <= latitude: the lattice cannot cover the poles. Outward normals.
-SurfacePtr ellipsoid(std::string name, const Vec3& axes, double latitudeDeg) {
+ParametricSurfacePtr ellipsoid(std::string name, const Vec3& axes, double latitudeDeg) {
   const double vmax = radians(latitudeDeg);
   return analytic(std::move(name), {0, 2 * kPi, -vmax, vmax, true, false}, [axes](double u, double v) {
     const double cu = std::cos(u), su = std::sin(u), cv = std::cos(v), sv = std::sin(v);
@@ -107,7 +107,7 @@ SurfacePtr ellipsoid(std::string name, const Vec3& axes, double latitudeDeg) {
 //   D = a - c cos u cos v.
 // Its curvature lines are the circles u = const and v = const. v = pi is the outer equator; a patch spans
 // uSpan around u = 0 and vSpan around v = pi, a span of 360 degrees closes the ring in that direction.
-SurfacePtr cyclide(double a, double c, double mu, double uSpanDeg, double vSpanDeg) {
+ParametricSurfacePtr cyclide(double a, double c, double mu, double uSpanDeg, double vSpanDeg) {
   const double b = std::sqrt(a * a - c * c);
   const bool closedU = uSpanDeg >= 360, closedV = vSpanDeg >= 360;
   const double hu = 0.5 * radians(uSpanDeg), hv = 0.5 * radians(vSpanDeg);
@@ -137,7 +137,7 @@ SurfacePtr cyclide(double a, double c, double mu, double uSpanDeg, double vSpanD
 
 // Enneper's minimal surface P = (u - u^3/3 + u v^2, v - v^3/3 + v u^2, u^2 - v^2) on the square [-R, R]^2;
 // normal +z at the centre.
-SurfacePtr enneper(double R) {
+ParametricSurfacePtr enneper(double R) {
   return analytic("enneper", {-R, R, -R, R, false, false}, [](double u, double v) {
     ParametricSurface::Jet j;
     j.P = Vec3(u - u * u * u / 3 + u * v * v, v - v * v * v / 3 + v * u * u, u * u - v * v);
@@ -152,7 +152,7 @@ SurfacePtr enneper(double R) {
 
 // Helicoid P = (s cos t, s sin t, c t) with (u, v) = (s, t), s the signed distance from the axis, so the strip
 // crosses the axis without a singularity. Pu x Pv = (c sin t, -c cos t, s): the normal rises where s > 0.
-SurfacePtr helicoid(double radius, double c, double halfAngle) {
+ParametricSurfacePtr helicoid(double radius, double c, double halfAngle) {
   return analytic("helicoid", {-radius, radius, -halfAngle, halfAngle, false, false}, [c](double s, double t) {
     const double ct = std::cos(t), st = std::sin(t);
     ParametricSurface::Jet j;
@@ -182,7 +182,7 @@ std::string str(double x) {
 
 struct Entry {
   SurfaceSpec spec;
-  std::function<SurfacePtr(const SurfaceParams&)> make;
+  std::function<ParametricSurfacePtr(const SurfaceParams&)> make;
 };
 
 const std::vector<Entry>& registry() {
@@ -363,7 +363,7 @@ const std::vector<SurfaceSpec>& analyticSurfaces() {
   return specs;
 }
 
-SurfacePtr makeSurface(const std::string& name, const SurfaceParams& params) {
+ParametricSurfacePtr makeSurface(const std::string& name, const SurfaceParams& params) {
   for (const Entry& e : registry()) {
     if (e.spec.name != name) continue;
     SurfaceParams full;

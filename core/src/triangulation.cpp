@@ -2,8 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 
+#include "phex/dupin.hpp"
+#include "phex/duality.hpp"
 #include "phex/error.hpp"
+#include "phex/ideal_triangle.hpp"
+#include "phex/metrics.hpp"
 
 namespace phex {
 namespace {
@@ -93,6 +99,67 @@ Triangulation latticeTriangulation(const ParametricSurface& surface, double cell
   t.mesh.F.resize(static_cast<int>(tris.size()), 3);
   for (int f = 0; f < static_cast<int>(tris.size()); ++f) t.mesh.F.row(f) = tris[f].transpose();
   return t;
+}
+
+std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface& surface) {
+  const int nv = static_cast<int>(t.mesh.V.rows());
+  std::vector<LocalGeometry> geo(nv);
+  const auto* parametric = dynamic_cast<const ParametricSurface*>(&surface);
+  const bool exact = parametric && static_cast<int>(t.uv.size()) == nv;
+  for (int v = 0; v < nv; ++v)
+    geo[v] = exact ? parametric->geometryAt(t.uv[v].x(), t.uv[v].y()) : surface.closestPoint(t.mesh.V.row(v).transpose());
+  return geo;
+}
+
+TriangulationCheck checkTriangulation(const Triangulation& t, const Surface& surface) {
+  TriangulationCheck c;
+  const TriMesh& T = t.mesh;
+  c.vertices = static_cast<int>(T.V.rows());
+  const VertexRings rings = vertexRings(T);
+  const std::vector<LocalGeometry> geo = vertexGeometry(t, surface);
+  long edges = 0;
+  c.edgeMin = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < T.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const double len = (T.V.row(T.F(f, k)) - T.V.row(T.F(f, (k + 1) % 3))).norm();
+      c.edgeMin = std::min(c.edgeMin, len);
+      c.edgeMax = std::max(c.edgeMax, len);
+      c.edgeMean += len;
+      ++edges;
+    }
+  c.edgeMean = edges ? c.edgeMean / edges : 0.0;
+  if (!edges) c.edgeMin = 0;
+  int regular = 0;
+  for (int v = 0; v < c.vertices; ++v) {
+    if (rings.triangles[v].empty()) continue;
+    if (!rings.closed[v]) {
+      ++c.boundaryVertices;
+      continue;
+    }
+    ++c.interiorVertices;
+    const int valence = static_cast<int>(rings.triangles[v].size());
+    ++c.interiorValence[valence];
+    regular += valence == 6;
+    // Propositions 4 and 5, with each triangle of the real star taken as the fundamental triangle of a
+    // symmetric star in the vertex's tangent plane (vertical projection, §4.1).
+    const LocalGeometry& g = geo[v];
+    const PointType type = classify(g, 1e-6, c.edgeMean);
+    if (type == PointType::Parabolic || type == PointType::Planar) {
+      c.parabolicStars.push_back(v);
+      continue;
+    }
+    bool valid = true;
+    for (int f : rings.triangles[v]) {
+      int k = 0;
+      while (T.F(f, k) != v) ++k;
+      const Triangle2 tri = {Vec2(0, 0), toTangentPlane(g, T.V.row(T.F(f, (k + 1) % 3)).transpose()),
+                             toTangentPlane(g, T.V.row(T.F(f, (k + 2) % 3)).transpose())};
+      valid = valid && starIsValid(g, tri);
+    }
+    if (!valid) c.invalidStars.push_back(v);
+  }
+  c.regularFraction = c.interiorVertices ? double(regular) / c.interiorVertices : 0.0;
+  return c;
 }
 
 }  // namespace phex

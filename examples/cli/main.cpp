@@ -184,7 +184,7 @@ int curvature(const std::vector<std::string>& args) {
     const phex::MeshSurface s(phex::readMesh(mesh), mesh);
     rows = s.vertexGeometries();
   } else {
-    const phex::SurfacePtr s = phex::makeSurface(surface, params);
+    const phex::ParametricSurfacePtr s = phex::makeSurface(surface, params);
     const phex::Triangulation t = phex::latticeTriangulation(*s, phex::cellForFaceCount(*s, faces));
     for (const phex::Vec2& uv : t.uv) rows.push_back(s->geometryAt(uv.x(), uv.y()));
   }

@@ -8,7 +8,7 @@
 using namespace phex;
 
 TEST_CASE("duality: tangent dual faces lie in the tangent planes (§4.1)") {
-  const SurfacePtr s = makeSurface("sphere");
+  const ParametricSurfacePtr s = makeSurface("sphere");
   const Triangulation t = latticeTriangulation(*s, cellForFaceCount(*s, 500));
   const DualMesh d = tangentDual(t, *s);
   CHECK(d.fallbackCount == 0);  // no parabolic point on a sphere
@@ -25,7 +25,7 @@ TEST_CASE("duality: tangent dual faces lie in the tangent planes (§4.1)") {
 }
 
 TEST_CASE("duality: the torus falls back to centroids only near its parabolic circles") {
-  const SurfacePtr s = makeSurface("torus");
+  const ParametricSurfacePtr s = makeSurface("torus");
   const Triangulation t = latticeTriangulation(*s, cellForFaceCount(*s, 2000));
   const DualMesh d = tangentDual(t, *s);
   CHECK(d.mesh.faceCount() == t.mesh.V.rows());

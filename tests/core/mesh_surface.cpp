@@ -178,7 +178,7 @@ TEST_CASE("mesh_surface: normals follow the triangles, also at the boundary") {
 }
 
 TEST_CASE("mesh_surface: closest point lands on the mesh with interpolated geometry") {
-  const SurfacePtr torus = makeSurface("torus");
+  const ParametricSurfacePtr torus = makeSurface("torus");
   const Sampled s = sample(*torus, 250, 80, 0.3);
   const MeshSurface m(s.mesh, "torus");
   std::vector<double> kErr;

@@ -30,7 +30,7 @@ std::pair<double, double> fromKH(double K, double H) {
 
 TEST_CASE("surfaces: every surface's jet matches central differences of its position") {
   for (const SurfaceSpec& spec : analyticSurfaces()) {
-    const SurfacePtr s = makeSurface(spec.name);
+    const ParametricSurfacePtr s = makeSurface(spec.name);
     const ParametricSurface::Domain d = s->domain();
     const double hu = 1e-4 * (d.u1 - d.u0), hv = 1e-4 * (d.v1 - d.v0);
     for (const Vec2& uv : samples(*s)) {
@@ -50,7 +50,7 @@ TEST_CASE("surfaces: every surface's jet matches central differences of its posi
 
 TEST_CASE("surfaces: every surface is regular with an orthonormal right-handed principal frame") {
   for (const SurfaceSpec& spec : analyticSurfaces()) {
-    const SurfacePtr s = makeSurface(spec.name);
+    const ParametricSurfacePtr s = makeSurface(spec.name);
     const ParametricSurface::Domain d = s->domain();
     INFO(spec.name);
     // Corners and edges included: trimming must keep singular points (poles, apex) out of the domain.
@@ -70,7 +70,7 @@ TEST_CASE("surfaces: every surface is regular with an orthonormal right-handed p
 
 TEST_CASE("surfaces: closest point of a point off the surface along the normal is the foot") {
   for (const SurfaceSpec& spec : analyticSurfaces()) {
-    const SurfacePtr s = makeSurface(spec.name);
+    const ParametricSurfacePtr s = makeSurface(spec.name);
     const double size = diameter(*s);
     for (const Vec2& uv : samples(*s)) {
       const LocalGeometry g = s->geometryAt(uv.x(), uv.y());
@@ -93,7 +93,7 @@ TEST_CASE("surfaces: normals point outward on closed and revolution surfaces, up
                                             "cylinder", "cone", "catenoid"};
   const std::set<std::string> heightFields = {"elliptic-paraboloid", "hyperbolic-paraboloid", "plane", "freeform"};
   for (const SurfaceSpec& spec : analyticSurfaces()) {
-    const SurfacePtr s = makeSurface(spec.name);
+    const ParametricSurfacePtr s = makeSurface(spec.name);
     const ParametricSurface::Domain d = s->domain();
     INFO(spec.name);
     if (closed.count(spec.name)) {
@@ -129,7 +129,7 @@ TEST_CASE("surfaces: normals point outward on closed and revolution surfaces, up
 }
 
 TEST_CASE("surfaces: sphere has k1 = k2 = 1/R and outward normals") {
-  const SurfacePtr s = makeSurface("sphere", {{"R", 2.0}});
+  const ParametricSurfacePtr s = makeSurface("sphere", {{"R", 2.0}});
   for (double u : {0.1, 1.7, 4.0})
     for (double v : {-0.8, 0.0, 0.9}) {
       const LocalGeometry g = s->geometryAt(u, v);
@@ -143,7 +143,7 @@ TEST_CASE("surfaces: sphere has k1 = k2 = 1/R and outward normals") {
 
 TEST_CASE("surfaces: torus principal curvatures match the closed form") {
   const double R = 1.0, r = 0.4;
-  const SurfacePtr s = makeSurface("torus", {{"R", R}, {"r", r}});
+  const ParametricSurfacePtr s = makeSurface("torus", {{"R", R}, {"r", r}});
   for (double v : {-2.5, -1.0, 0.0, 0.7, 3.0}) {
     const LocalGeometry g = s->geometryAt(0.3, v);
     // Meridian curvature 1/r; parallel curvature cos v / (R + r cos v).
@@ -156,7 +156,7 @@ TEST_CASE("surfaces: torus principal curvatures match the closed form") {
 
 TEST_CASE("surfaces: ellipsoid and hyperboloid Gaussian curvatures match the quadric formulas") {
   const double a = 1.3, b = 0.9, c = 0.7;
-  const SurfacePtr e = makeSurface("ellipsoid", {{"a", a}, {"b", b}, {"c", c}});
+  const ParametricSurfacePtr e = makeSurface("ellipsoid", {{"a", a}, {"b", b}, {"c", c}});
   for (const Vec2& uv : samples(*e)) {
     const LocalGeometry g = e->geometryAt(uv.x(), uv.y());
     const Vec3 p = g.point;
@@ -167,7 +167,7 @@ TEST_CASE("surfaces: ellipsoid and hyperboloid Gaussian curvatures match the qua
   }
   // x^2/a^2 + y^2/a^2 - z^2/c^2 = 1: K = -1 / (a^4 c^2 ((x^2 + y^2)/a^4 + z^2/c^4)^2), -1/c^2 at the waist.
   const double ha = 0.7, hc = 0.5;
-  const SurfacePtr h = makeSurface("hyperboloid", {{"a", ha}, {"c", hc}, {"height", 3.0}});
+  const ParametricSurfacePtr h = makeSurface("hyperboloid", {{"a", ha}, {"c", hc}, {"height", 3.0}});
   CHECK(h->geometryAt(0.4, 0.0).gaussianCurvature() == Approx(-1 / (hc * hc)).epsilon(1e-12));
   for (const Vec2& uv : samples(*h)) {
     const LocalGeometry g = h->geometryAt(uv.x(), uv.y());
@@ -183,7 +183,7 @@ TEST_CASE("surfaces: ellipsoid and hyperboloid Gaussian curvatures match the qua
 
 TEST_CASE("surfaces: the cyclide satisfies its implicit equation and is a Dupin cyclide") {
   const double a = 1.0, c = 0.35, mu = 0.55, b2 = a * a - c * c;
-  const SurfacePtr s = makeSurface("cyclide", {{"a", a}, {"c", c}, {"mu", mu}});
+  const ParametricSurfacePtr s = makeSurface("cyclide", {{"a", a}, {"c", c}, {"mu", mu}});
   for (int i = 0; i < 12; ++i)
     for (int k = 0; k < 12; ++k) {
       const Vec3 p = s->position(0.1 + i * 0.52, 0.2 + k * 0.52);
@@ -211,8 +211,8 @@ TEST_CASE("surfaces: the cyclide satisfies its implicit equation and is a Dupin 
   CHECK(s->geometryAt(0.0, M_PI).gaussianCurvature() > 0);
   CHECK(s->geometryAt(0.0, 0.0).gaussianCurvature() < 0);
   // c = 0 is the torus with radii a and mu, with the same orientation.
-  const SurfacePtr ring = makeSurface("cyclide", {{"a", 1.0}, {"c", 0.0}, {"mu", 0.4}});
-  const SurfacePtr torus = makeSurface("torus", {{"R", 1.0}, {"r", 0.4}});
+  const ParametricSurfacePtr ring = makeSurface("cyclide", {{"a", 1.0}, {"c", 0.0}, {"mu", 0.4}});
+  const ParametricSurfacePtr torus = makeSurface("torus", {{"R", 1.0}, {"r", 0.4}});
   for (const Vec2& uv : samples(*ring)) {
     const LocalGeometry g = ring->geometryAt(uv.x(), uv.y());
     const LocalGeometry t = torus->closestPoint(g.point);
@@ -222,7 +222,7 @@ TEST_CASE("surfaces: the cyclide satisfies its implicit equation and is a Dupin 
     CHECK(g.k2 == Approx(t.k2).margin(1e-9));
   }
   // A patch spans the given angles around the outer equator and is not closed.
-  const SurfacePtr patch = makeSurface("cyclide", {{"uSpan", 90.0}, {"vSpan", 120.0}});
+  const ParametricSurfacePtr patch = makeSurface("cyclide", {{"uSpan", 90.0}, {"vSpan", 120.0}});
   const ParametricSurface::Domain d = patch->domain();
   CHECK(!patch->isClosed());
   CHECK(d.u1 - d.u0 == Approx(M_PI / 2));
@@ -231,7 +231,7 @@ TEST_CASE("surfaces: the cyclide satisfies its implicit equation and is a Dupin 
 
 TEST_CASE("surfaces: the vase has an elliptic belly, a hyperbolic neck and a parabolic circle between") {
   const double H = 3.0;
-  const SurfacePtr s = makeSurface("vase", {{"height", H}});
+  const ParametricSurfacePtr s = makeSurface("vase", {{"height", H}});
   CHECK(s->geometryAt(0.5, H / 4).gaussianCurvature() > 0);
   CHECK(s->geometryAt(0.5, 3 * H / 4).gaussianCurvature() < 0);
   const LocalGeometry g = s->geometryAt(0.5, H / 2);
@@ -250,7 +250,7 @@ TEST_CASE("surfaces: paraboloids at the apex, cylinder and cone match the closed
   CHECK(h.k1 == Approx(0.5).epsilon(1e-12));
   CHECK(h.k2 == Approx(-2.0).epsilon(1e-12));
   CHECK(std::abs(h.d1.x()) == Approx(1.0));
-  const SurfacePtr cyl = makeSurface("cylinder", {{"R", 2.0}});
+  const ParametricSurfacePtr cyl = makeSurface("cylinder", {{"R", 2.0}});
   for (const Vec2& uv : samples(*cyl)) {
     const LocalGeometry g = cyl->geometryAt(uv.x(), uv.y());
     CHECK(g.k1 == Approx(0.5).epsilon(1e-12));
@@ -258,7 +258,7 @@ TEST_CASE("surfaces: paraboloids at the apex, cylinder and cone match the closed
     CHECK(std::abs(g.d2.z()) == Approx(1.0));  // the rulings
   }
   const double alpha = 25 * M_PI / 180;
-  const SurfacePtr cone = makeSurface("cone", {{"angle", 25.0}});
+  const ParametricSurfacePtr cone = makeSurface("cone", {{"angle", 25.0}});
   for (const Vec2& uv : samples(*cone)) {
     const LocalGeometry g = cone->geometryAt(uv.x(), uv.y());
     CHECK(g.k1 == Approx(std::cos(alpha) / std::hypot(g.point.x(), g.point.y())).epsilon(1e-12));
@@ -271,7 +271,7 @@ TEST_CASE("surfaces: paraboloids at the apex, cylinder and cone match the closed
 }
 
 TEST_CASE("surfaces: Enneper, catenoid and helicoid are minimal with the closed-form K") {
-  const SurfacePtr enneper = makeSurface("enneper");
+  const ParametricSurfacePtr enneper = makeSurface("enneper");
   for (const Vec2& uv : samples(*enneper)) {
     const LocalGeometry g = enneper->geometryAt(uv.x(), uv.y());
     const double K = -4 / std::pow(1 + uv.squaredNorm(), 4);
@@ -279,14 +279,14 @@ TEST_CASE("surfaces: Enneper, catenoid and helicoid are minimal with the closed-
     CHECK(g.gaussianCurvature() == Approx(K).epsilon(1e-10));
   }
   const double c = 0.8;
-  const SurfacePtr catenoid = makeSurface("catenoid", {{"c", c}});
+  const ParametricSurfacePtr catenoid = makeSurface("catenoid", {{"c", c}});
   for (const Vec2& uv : samples(*catenoid)) {
     const LocalGeometry g = catenoid->geometryAt(uv.x(), uv.y());
     const auto [k1, k2] = fromKH(-1 / (c * c * std::pow(std::cosh(g.point.z() / c), 4)), 0.0);
     CHECK(g.k1 == Approx(k1).epsilon(1e-10));
     CHECK(g.k2 == Approx(k2).epsilon(1e-10));
   }
-  const SurfacePtr helicoid = makeSurface("helicoid", {{"pitch", 3.0}});
+  const ParametricSurfacePtr helicoid = makeSurface("helicoid", {{"pitch", 3.0}});
   const double hc = 3.0 / (2 * M_PI);
   for (const Vec2& uv : samples(*helicoid)) {
     const LocalGeometry g = helicoid->geometryAt(uv.x(), uv.y());
@@ -299,7 +299,7 @@ TEST_CASE("surfaces: Enneper, catenoid and helicoid are minimal with the closed-
 
 TEST_CASE("surfaces: the free-form height field has elliptic, hyperbolic and parabolic points") {
   const double L = 3.0;
-  const SurfacePtr s = makeSurface("freeform", {{"size", L}});
+  const ParametricSurfacePtr s = makeSurface("freeform", {{"size", L}});
   CHECK(s->geometryAt(-0.18 * L, -0.12 * L).gaussianCurvature() > 0);  // top of the larger bump
   CHECK(s->geometryAt(0.45 * L, -0.45 * L).gaussianCurvature() > 0);   // the dome far from the bumps
   // Walking out of the bump top along x, K changes sign: a parabolic curve is crossed.

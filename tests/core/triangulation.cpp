@@ -1,13 +1,17 @@
 #include <catch.hpp>
 
+#include <algorithm>
+#include <cmath>
+
 #include "phex/duality.hpp"
+#include "phex/metrics.hpp"
 #include "phex/surfaces.hpp"
 #include "phex/triangulation.hpp"
 
 using namespace phex;
 
 TEST_CASE("triangulation: lattice on the torus is closed and regular") {
-  const SurfacePtr s = makeSurface("torus");
+  const ParametricSurfacePtr s = makeSurface("torus");
   const Triangulation t = latticeTriangulation(*s, cellForFaceCount(*s, 2000));
   const int nv = static_cast<int>(t.mesh.V.rows());
   CHECK(nv > 1600);
@@ -23,7 +27,7 @@ TEST_CASE("triangulation: lattice on the torus is closed and regular") {
 }
 
 TEST_CASE("triangulation: edge lengths follow the cell size") {
-  const SurfacePtr s = makeSurface("sphere");
+  const ParametricSurfacePtr s = makeSurface("sphere");
   const double h = 0.1;
   const Triangulation t = latticeTriangulation(*s, h);
   double sum = 0;
@@ -36,4 +40,45 @@ TEST_CASE("triangulation: edge lengths follow the cell size") {
   int open = 0;
   for (bool c : rings.closed) open += !c;
   CHECK(open > 0);
+}
+
+TEST_CASE("triangulation: the star check on regular lattices") {
+  const ParametricSurfacePtr sphere = makeSurface("sphere");
+  const Triangulation ts = latticeTriangulation(*sphere, cellForFaceCount(*sphere, 1000));
+  const TriangulationCheck cs = checkTriangulation(ts, *sphere);
+  CHECK(cs.boundaryVertices > 0);
+  CHECK(cs.invalidStars.empty());
+  CHECK(cs.parabolicStars.empty());
+
+  const ParametricSurfacePtr torus = makeSurface("torus");
+  const Triangulation t = latticeTriangulation(*torus, cellForFaceCount(*torus, 2000));
+  const TriangulationCheck c = checkTriangulation(t, *torus);
+  CHECK(c.interiorVertices == t.mesh.V.rows());
+  CHECK(c.boundaryVertices == 0);
+  CHECK(c.regularFraction == 1.0);
+  CHECK(c.interiorValence.at(6) == c.interiorVertices);
+  CHECK(c.edgeMin > 0);
+  CHECK(c.edgeMax < 3 * c.edgeMin);
+  // A lattice ignores the conjugate directions; where one principal curvature nearly vanishes (next to the
+  // parabolic circles v = ±π/2) its triangles fail Proposition 4 / 5, and only there.
+  CHECK(!c.invalidStars.empty());
+  for (int v : c.invalidStars) CHECK(std::abs(std::abs(t.uv[v].y()) - M_PI / 2) < 3 * c.edgeMax / 0.4);
+}
+
+TEST_CASE("triangulation: invalid stars predict self-intersecting dual faces (Fig. 11 top)") {
+  // Parameter lines of the hyperboloid of one sheet put all three edge directions of a lattice triangle
+  // between the asymptotic directions (Proposition 5 fails), as in the paper's Fig. 11 (top).
+  const ParametricSurfacePtr s = makeSurface("hyperboloid");
+  const Triangulation t = latticeTriangulation(*s, cellForFaceCount(*s, 400));
+  const TriangulationCheck c = checkTriangulation(t, *s);
+  const DualMesh d = tangentDual(t, *s);
+  const MeshMetrics m = measure(d.mesh);
+  REQUIRE(m.selfIntersectingCount > 0);
+  REQUIRE(!c.invalidStars.empty());
+  // Every self-intersecting face is dual to a star the check flagged.
+  int predicted = 0;
+  for (int f = 0; f < d.mesh.faceCount(); ++f)
+    if (m.selfIntersecting[f])
+      predicted += std::count(c.invalidStars.begin(), c.invalidStars.end(), d.faceVertex[f]) > 0;
+  CHECK(predicted == m.selfIntersectingCount);
 }

@@ -10,6 +10,8 @@ export type PHexErrorCode =
   | 'cannot_tile'
   /** The run was cancelled through its AbortSignal, or the instance was disposed. */
   | 'cancelled'
+  /** This core build lacks the feature asked for (mesh input, a method, ...): see {@link PHex.capabilities}. */
+  | 'unsupported'
   /** The wasm module or the worker could not be loaded. */
   | 'io'
   /** A bug in phex: please report it. */
@@ -33,12 +35,22 @@ export interface Mesh {
   faceIndices: Uint32Array;
 }
 
+/** Polylines stored flat: line i has the points offsets[i] .. offsets[i + 1] - 1 of `positions`. */
+export interface Polylines {
+  /** Point coordinates x, y, z: length 3 × point count. */
+  positions: Float64Array;
+  /** Length line count + 1. */
+  offsets: Uint32Array;
+}
+
 /** The triangle mesh laid on the surface, whose dual is the hexagonal mesh. */
 export interface Triangulation {
   /** Vertex coordinates: length 3 × vertex count. */
   positions: Float64Array;
   /** Vertex indices (0-based), three per triangle. */
   triangles: Uint32Array;
+  /** Integral lines of the direction field the triangulation follows, when the method has one. */
+  fieldLines?: Polylines;
 }
 
 /** Quality measures of the P-Hex mesh. */
@@ -65,6 +77,12 @@ export interface Metrics {
   /** Largest and mean of `surfaceDistance`. */
   surfaceDistanceMax: number;
   surfaceDistanceMean: number;
+  /** Per face, where the core provides it: area in model units squared (else compute it with {@link faceAreas}). */
+  faceArea?: Float64Array;
+  /** Per face, where the core provides it: 1 for a convex face, 0 for a non-convex one (§4.2: convex where K > 0). */
+  convexity?: Uint8Array;
+  /** Per face, where the core provides it: regularity in [0, 1] (1 for a regular polygon). */
+  regularity?: Float64Array;
 }
 
 /** One iteration of the planarity optimization. */
@@ -125,10 +143,31 @@ export interface Result {
   dualFallbacks: number;
 }
 
-/** Parameters of {@link PHex.run}. Only `surface` is required; the rest take the defaults shown. */
+/** A triangulation method (§5): see {@link RunParams.method}. */
+export type Method = 'lattice' | 'progressive' | 'prespecified' | 'subdivision';
+
+/** A direction field for pre-specified conjugation (§5.3): see {@link RunParams.field}. */
+export type Field = 'principal' | `angle:${number}` | 'param' | 'radial' | 'diverging' | 'spiral';
+
+/** A mesh file format accepted as input. */
+export type MeshFormat = 'obj' | 'off' | 'ply' | 'stl';
+
+/**
+ * Parameters of {@link PHex.run}. Exactly one of `surface` (an analytic surface) or `mesh` (the bytes
+ * of a triangle-mesh file) is required; the rest take the defaults shown.
+ */
 export interface RunParams {
   /** Name of an analytic surface, e.g. "torus" (see {@link PHex.surfaces}). */
-  surface: string;
+  surface?: string;
+  /**
+   * The bytes of a triangle mesh file to tile instead of an analytic surface. Needs
+   * `capabilities().meshInput`; rejected with code 'unsupported' otherwise, 'invalid_input' for a bad file.
+   */
+  mesh?: Uint8Array | ArrayBuffer;
+  /** Format of `mesh`; sniffed from the content when missing. */
+  meshFormat?: MeshFormat;
+  /** Name of `mesh` (e.g. its file name), used in error messages. */
+  meshName?: string;
   /** Parameters of that surface by name; missing ones take their defaults (see {@link SurfaceParameter}). */
   surfaceParams?: Record<string, number>;
   /** Wanted number of hexagons, an integer in 12 .. 1 000 000. Default 2000. Ignored when `cell` > 0. */
@@ -154,6 +193,74 @@ export interface RunParams {
    * 'volumes': the paper's tetrahedron-volume objective by Gauss-Newton (Ceres), the reference.
    */
   solver?: 'local' | 'planes' | 'volumes';
+  /**
+   * Triangulation method (needs `capabilities().methods` to list it): 'lattice' (parameter lattice, the
+   * default), 'progressive' conjugation (§5.2), 'prespecified' conjugation along `field` (§5.3),
+   * 'subdivision' (Loop subdivision route for closed convex surfaces, §7).
+   */
+  method?: Method;
+  /** Direction field of 'prespecified' (needs `capabilities().fields`). Default 'principal'. */
+  field?: Field;
+  /** §5.3 step-size lower bound near parabolic curves, relative to the cell size, >= 0 (needs `capabilities().lowerBound`). Default 0: off. */
+  lowerBound?: number;
+}
+
+/** A run parameter as listed in {@link PARAMETERS}. */
+export interface ParameterSpec {
+  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'method' | 'field' | 'lowerBound';
+  type: 'integer' | 'number' | 'enum' | 'field';
+  default: number | string;
+  /** Range of a number (inclusive). */
+  min?: number;
+  max?: number;
+  /** Accepted values of an enum (for 'field', 'angle:DEG' stands for any angle in degrees). */
+  values?: readonly string[];
+  /** The {@link Capabilities} entry the parameter needs, if any. */
+  requires?: 'methods' | 'fields' | 'lowerBound';
+  description: string;
+}
+
+/** Type, default, range and meaning of every run parameter besides `surface` and `mesh` (for UIs). */
+export const PARAMETERS: readonly ParameterSpec[];
+
+/** The mesh file formats phex reads. */
+export const MESH_FORMATS: readonly MeshFormat[];
+
+/** What this build of the core can do beyond analytic surfaces. */
+export interface Capabilities {
+  /** run() accepts `mesh` (uploaded files). */
+  meshInput: boolean;
+  /** Formats accepted as `mesh`. */
+  meshFormats: MeshFormat[];
+  /** Triangulation methods accepted as `method` (empty: the parameter is not supported). */
+  methods: Method[];
+  /** Direction fields accepted as `field` ('angle:DEG' stands for any angle). */
+  fields: string[];
+  /** `lowerBound` is accepted. */
+  lowerBound: boolean;
+  /** {@link PHex.surfacePreview} is available. */
+  surfacePreview: boolean;
+  /** {@link PHex.memory} is available (always true). */
+  memory: boolean;
+}
+
+/** The surface as a triangle mesh with principal curvatures per vertex, for a curvature view. */
+export interface SurfacePreview {
+  /** Vertex coordinates: length 3 × vertex count. */
+  positions: Float64Array;
+  /** Vertex indices, three per triangle. */
+  triangles: Uint32Array;
+  /** Principal curvatures per vertex (1 / model units); Gaussian curvature is k1·k2, mean (k1 + k2) / 2. */
+  k1: Float64Array;
+  k2: Float64Array;
+}
+
+/** The wasm heap: see {@link PHex.memory}. */
+export interface MemoryUse {
+  /** Size of the wasm heap in bytes (grows, never shrinks). */
+  heapBytes: number;
+  /** Bytes handed out by malloc and not freed, where the core can tell; else null. */
+  usedBytes: number | null;
 }
 
 /** One progress report of a run. */
@@ -206,9 +313,18 @@ export interface PHex {
   run(params: RunParams, options?: RunOptions): Promise<Result>;
   /** The analytic surfaces and their parameters. */
   surfaces(): Promise<SurfaceSpec[]>;
+  /** What this core build supports (mesh input, methods, fields ...); the caller gets its own copy. */
+  capabilities(): Capabilities;
+  /**
+   * The surface of `params` (surface or mesh) as a triangle mesh with principal curvatures. Rejects
+   * with code 'unsupported' when `capabilities().surfacePreview` is false. Queued like run().
+   */
+  surfacePreview(params: RunParams, options?: { signal?: AbortSignal }): Promise<SurfacePreview>;
+  /** Memory of the wasm instance (in the worker, if any), measured between runs. */
+  memory(): Promise<MemoryUse>;
   /** Version of the phex core, e.g. "0.1.0". */
   readonly version: string;
-  /** Stops the worker, if any; pending runs reject with code 'cancelled' and later calls fail. */
+  /** Stops the worker and frees the wasm instance; pending runs reject with code 'cancelled' and later calls fail. */
   dispose(): void;
 }
 
@@ -236,5 +352,14 @@ export interface TriangulatedFaces {
 /** Fan-triangulates each face (n corners → n − 2 triangles from its first corner), for THREE.BufferGeometry. */
 export function triangulateFaces(mesh: Mesh): TriangulatedFaces;
 
-/** The mesh as Wavefront OBJ text with full double precision, in the format of `phex run --out`. */
-export function meshToOBJ(mesh: Mesh): string;
+/** The mesh (or a triangulation) as Wavefront OBJ text with full double precision, in the format of `phex run --out`. */
+export function meshToOBJ(mesh: Mesh | Triangulation): string;
+
+/**
+ * The mesh (or a triangulation) as ASCII PLY text with full double precision; `faceValues` adds named
+ * per-face double properties, each of length face count (e.g. `{planarity: result.metrics.planarity}`).
+ */
+export function meshToPLY(mesh: Mesh | Triangulation, faceValues?: Record<string, ArrayLike<number>>): string;
+
+/** Area of each face in model units squared (length face count). */
+export function faceAreas(mesh: Mesh | Triangulation): Float64Array;

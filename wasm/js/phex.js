@@ -16,14 +16,38 @@ const ENGINE_WORKER_NAME = 'phex-engine'; // phex.worker.js serves only a worker
 const cancelled = () => new PHexError('cancelled', 'the run was cancelled');
 const disposed = () => new PHexError('cancelled', 'this phex instance was disposed');
 
-const NUMBER_PARAMS = ['cell', 'tolerance', 'lambda', 'mu'];
-const INTEGER_PARAMS = ['faces', 'maxIterations'];
-const DUALITIES = ['dupin', 'tangent'];
-const SOLVERS = ['local', 'planes', 'volumes'];
+/**
+ * The run() parameters besides `surface` / `mesh`: type, default, range and meaning. The core enforces
+ * the ranges (its messages name the parameter); the table serves type checks here and tooltips in UIs.
+ * `requires` names the capability a parameter needs (see capabilities()).
+ */
+export const PARAMETERS = Object.freeze([
+  { name: 'faces', type: 'integer', default: 2000, min: 12, max: 1_000_000, description: 'Wanted number of hexagons. Ignored when cell > 0.' },
+  { name: 'cell', type: 'number', default: 0, min: 0, max: Infinity, description: 'Wanted edge length of the triangulation, in model units; 0 derives it from faces.' },
+  { name: 'tolerance', type: 'number', default: 1e-9, min: 1e-15, max: 0.1, description: 'Planarity goal: largest corner distance from the face plane over the mean edge length.' },
+  { name: 'lambda', type: 'number', default: 1, min: 0, max: 1e6, description: 'Initial closeness weight, divided by 10 every round (§6).' },
+  { name: 'mu', type: 'number', default: 0, min: 0, max: 1e6, description: 'Weight of the distance to the surface (§6).' },
+  { name: 'maxIterations', type: 'integer', default: 100, min: 1, max: 10_000, description: 'Cap on solver iterations.' },
+  { name: 'duality', type: 'enum', default: 'dupin', values: ['dupin', 'tangent'], description: 'Initial dual mesh: Dupin centres (§6) or intersections of tangent planes (§4.1).' },
+  { name: 'solver', type: 'enum', default: 'local', values: ['local', 'planes', 'volumes'], description: "Planarity solver: 'local' (fastest), 'planes' (Ceres on face planes), 'volumes' (the paper's tetrahedron volumes)." },
+  { name: 'method', type: 'enum', default: 'lattice', values: ['lattice', 'progressive', 'prespecified', 'subdivision'], requires: 'methods', description: 'Triangulation: parameter lattice, progressive conjugation (§5.2), pre-specified conjugation along a field (§5.3), or Loop subdivision of closed convex surfaces (§7).' },
+  { name: 'field', type: 'field', default: 'principal', values: ['principal', 'angle:DEG', 'param', 'radial', 'diverging', 'spiral'], requires: 'fields', description: "Direction field of pre-specified conjugation (§5.3): principal directions, a fixed angle to them ('angle:30'), parameter lines, radial, diverging or spiral." },
+  { name: 'lowerBound', type: 'number', default: 0, min: 0, max: Infinity, requires: 'lowerBound', description: 'Smallest step length near parabolic curves, relative to the cell size (§5.3); 0 turns the bound off.' },
+]);
+
+/** Formats of uploaded meshes: run({mesh, meshFormat}). */
+export const MESH_FORMATS = Object.freeze(['obj', 'off', 'ply', 'stl']);
+
+const PARAMETER = Object.fromEntries(PARAMETERS.map((p) => [p.name, p]));
+const FIELD_PATTERN = /^(principal|param|radial|diverging|spiral|angle:-?\d+(\.\d+)?)$/;
 const INT32_MAX = 2 ** 31 - 1;
 
 function invalid(message) {
   return new PHexError('invalid_parameter', message);
+}
+
+function unsupported(name) {
+  return new PHexError('unsupported', `${name} is not supported by this phex core build (see capabilities())`);
 }
 
 function describe(value) {
@@ -38,19 +62,34 @@ function checkNumber(name, value) {
   if (typeof value !== 'number' || !Number.isFinite(value)) throw invalid(`${name} must be a finite number, got ${describe(value)}`);
 }
 
+/** A capability a parameter value needs is declared by the core, or the value is rejected as unsupported. */
+function checkSupported(spec, value, capabilities) {
+  if (!spec.requires) return;
+  const declared = capabilities[spec.requires];
+  if (Array.isArray(declared)) {
+    const forms = typeof value === 'string' ? [value, value.replace(/:.*$/, ':DEG'), value.split(':')[0]] : [value];
+    if (!forms.some((form) => declared.includes(form))) {
+      throw declared.length === 0 ? unsupported(spec.name) : invalid(`${spec.name} ${JSON.stringify(value)} is not available in this core build (available: ${declared.join(', ')})`);
+    }
+  } else if (!declared) {
+    throw unsupported(spec.name);
+  }
+}
+
 /**
  * Checks the types of run() parameters and returns a copy without undefined entries. Ranges are
  * left to the core, which knows them and says them in its messages.
  */
-function checkParams(params) {
+function checkParams(params, capabilities) {
   if (params === null || typeof params !== 'object' || Array.isArray(params)) {
     throw invalid(`run() expects a parameter object, got ${describe(params)}`);
   }
-  const known = new Set(['surface', 'surfaceParams', 'duality', 'solver', ...NUMBER_PARAMS, ...INTEGER_PARAMS]);
+  const known = ['surface', 'surfaceParams', 'mesh', 'meshFormat', 'meshName', ...PARAMETERS.map((p) => p.name)];
   const out = {};
   for (const [name, value] of Object.entries(params)) {
-    if (!known.has(name)) throw invalid(`unknown parameter '${name}' (known: ${[...known].join(', ')})`);
+    if (!known.includes(name)) throw invalid(`unknown parameter '${name}' (known: ${known.join(', ')})`);
     if (value === undefined) continue;
+    const spec = PARAMETER[name];
     if (name === 'surface') {
       if (typeof value !== 'string' || value === '') throw invalid(`surface must be a surface name, got ${describe(value)}`);
     } else if (name === 'surfaceParams') {
@@ -58,20 +97,38 @@ function checkParams(params) {
         throw invalid(`surfaceParams must be an object of numbers, got ${describe(value)}`);
       }
       for (const [key, v] of Object.entries(value)) checkNumber(`surfaceParams.${key}`, v);
-    } else if (name === 'duality') {
-      if (!DUALITIES.includes(value)) throw invalid(`duality must be one of ${DUALITIES.join(', ')}, got ${describe(value)}`);
-    } else if (name === 'solver') {
-      if (!SOLVERS.includes(value)) throw invalid(`solver must be one of ${SOLVERS.join(', ')}, got ${describe(value)}`);
+    } else if (name === 'mesh') {
+      if (!(value instanceof Uint8Array) && !(value instanceof ArrayBuffer)) {
+        throw invalid(`mesh must be the bytes of a mesh file (Uint8Array or ArrayBuffer), got ${describe(value)}`);
+      }
+    } else if (name === 'meshFormat') {
+      if (!MESH_FORMATS.includes(value)) throw invalid(`meshFormat must be one of ${MESH_FORMATS.join(', ')}, got ${describe(value)}`);
+    } else if (name === 'meshName') {
+      if (typeof value !== 'string') throw invalid(`meshName must be a string, got ${describe(value)}`);
+    } else if (spec.type === 'enum') {
+      if (!spec.values.includes(value)) throw invalid(`${name} must be one of ${spec.values.join(', ')}, got ${describe(value)}`);
+      checkSupported(spec, value, capabilities);
+    } else if (spec.type === 'field') {
+      if (typeof value !== 'string' || !FIELD_PATTERN.test(value)) {
+        throw invalid(`field must be one of principal, angle:DEG (e.g. angle:30), param, radial, diverging, spiral; got ${describe(value)}`);
+      }
+      checkSupported(spec, value, capabilities);
     } else {
       checkNumber(name, value);
       // The core takes these as 32-bit integers; anything else would be silently truncated on the way.
-      if (INTEGER_PARAMS.includes(name) && (!Number.isInteger(value) || Math.abs(value) > INT32_MAX)) {
+      if (spec.type === 'integer' && (!Number.isInteger(value) || Math.abs(value) > INT32_MAX)) {
         throw invalid(`${name} must be an integer, got ${describe(value)}`);
       }
+      checkSupported(spec, value, capabilities);
     }
-    out[name] = name === 'surfaceParams' ? { ...value } : value;
+    if (name === 'surfaceParams') out[name] = { ...value };
+    else if (name === 'mesh') out[name] = value instanceof ArrayBuffer ? new Uint8Array(value) : value;
+    else out[name] = value;
   }
-  if (out.surface === undefined) throw invalid('surface is required (see surfaces() for the names)');
+  if (out.mesh !== undefined && out.surface !== undefined) throw invalid('give either surface or mesh, not both');
+  if (out.mesh === undefined && out.surface === undefined) throw invalid('surface is required (see surfaces() for the names), or mesh with the bytes of a mesh file');
+  if (out.mesh === undefined && (out.meshFormat !== undefined || out.meshName !== undefined)) throw invalid('meshFormat and meshName need mesh');
+  if (out.mesh !== undefined && !capabilities.meshInput) throw unsupported('mesh input');
   return out;
 }
 
@@ -97,9 +154,13 @@ class LocalBackend {
   }
 
   async run(params, onProgress) {
+    return this.call('run', [params, onProgress]);
+  }
+
+  async call(method, args) {
     const engine = await this.start();
     try {
-      return engine.run(params, onProgress);
+      return engine[method](...args);
     } catch (error) {
       // A wasm trap leaves the instance unusable: load a fresh one for the next call.
       this.#engine = null;
@@ -115,8 +176,8 @@ class LocalBackend {
 /** Runs the core in a module Web Worker; cancelling terminates it and the next run starts a new one. */
 class WorkerBackend {
   #worker = null;
-  #ready = null; // promise of {version, surfaces} from the current worker
-  #current = null; // the run in flight: {id, resolve, reject, onProgress}
+  #ready = null; // promise of {version, surfaces, capabilities} from the current worker
+  #pending = new Map(); // id -> {resolve, reject, onProgress} of the requests in flight
   #nextId = 1;
 
   start() {
@@ -125,7 +186,7 @@ class WorkerBackend {
     this.#worker = worker;
     this.#ready = new Promise((resolve, reject) => {
       worker.addEventListener('message', ({ data }) => {
-        if (data.type === 'ready') resolve({ version: data.version, surfaces: data.surfaces });
+        if (data.type === 'ready') resolve(data.info);
         else if (data.type === 'failed') reject(new PHexError('io', data.message));
         else this.#receive(data);
       });
@@ -145,45 +206,49 @@ class WorkerBackend {
   }
 
   #receive(data) {
-    const current = this.#current;
-    if (!current || data.id !== current.id) return;
+    const request = this.#pending.get(data.id);
+    if (!request) return;
     if (data.type === 'progress') {
-      current.onProgress?.({ stage: data.stage, fraction: data.fraction, message: data.message });
-    } else if (data.type === 'result') {
-      this.#current = null;
-      current.resolve(data.result);
+      request.onProgress?.({ stage: data.stage, fraction: data.fraction, message: data.message });
+    } else if (data.type === 'reply') {
+      this.#pending.delete(data.id);
+      request.resolve(data.value);
     } else if (data.type === 'crashed') {
       this.#stop(new PHexError('internal', `the phex core failed: ${data.message}`));
     }
   }
 
-  /** Terminates the worker; the run in flight, if any, is rejected with `error`. */
+  /** Terminates the worker; the requests in flight, if any, are rejected with `error`. */
   #stop(error) {
     this.#worker?.terminate();
     this.#worker = null;
     this.#ready = null;
-    const current = this.#current;
-    this.#current = null;
-    if (current && error) current.reject(error);
+    const pending = [...this.#pending.values()];
+    this.#pending.clear();
+    if (error) for (const request of pending) request.reject(error);
   }
 
-  async run(params, onProgress, signal) {
+  run(params, onProgress, signal) {
+    return this.call('run', [params], { onProgress, signal });
+  }
+
+  async call(method, args, { onProgress, signal } = {}) {
     await this.start();
     if (signal?.aborted) throw cancelled();
     return new Promise((resolve, reject) => {
       const id = this.#nextId++;
       const onAbort = () => {
-        if (this.#current?.id === id) this.#stop(cancelled());
+        if (this.#pending.has(id)) this.#stop(cancelled());
       };
       signal?.addEventListener('abort', onAbort, { once: true });
       const done = () => signal?.removeEventListener('abort', onAbort);
-      this.#current = {
-        id,
+      this.#pending.set(id, {
         onProgress,
         resolve: (v) => (done(), resolve(v)),
         reject: (e) => (done(), reject(e)),
-      };
-      this.#worker.postMessage({ type: 'run', id, params });
+      });
+      // Typed arrays are copied, not transferred: the caller keeps its mesh bytes.
+      this.#worker.postMessage({ type: 'call', id, method, args, progress: Boolean(onProgress) });
     });
   }
 
@@ -194,28 +259,28 @@ class WorkerBackend {
 
 class PHex {
   #backend;
-  #surfaces;
-  #queue = Promise.resolve(); // runs one after another: the core computes one mesh at a time
+  #info;
+  #queue = Promise.resolve(); // one request after another: the core computes one mesh at a time
   #disposed = false;
 
   constructor(backend, info) {
     this.#backend = backend;
-    this.#surfaces = info.surfaces;
+    this.#info = info;
     this.version = info.version;
   }
 
-  run(params, { onProgress, signal } = {}) {
+  /** Queues `request` (a function starting a backend call) behind the earlier ones. */
+  #enqueue(request, signal) {
     return new Promise((resolve, reject) => {
       if (this.#disposed) throw disposed();
-      const checked = checkParams(params);
       if (signal?.aborted) throw cancelled();
-      // A run still waiting for its turn is rejected at once; one in flight is stopped by the backend.
+      // A request still waiting for its turn is rejected at once; one in flight is stopped by the backend.
       const onAbort = () => reject(cancelled());
       signal?.addEventListener('abort', onAbort, { once: true });
       const turn = this.#queue.then(() => {
         if (signal?.aborted) throw cancelled();
         if (this.#disposed) throw disposed();
-        return this.#backend.run(checked, onProgress, signal);
+        return request();
       });
       this.#queue = turn.catch(() => {});
       turn
@@ -225,8 +290,31 @@ class PHex {
     });
   }
 
+  run(params, { onProgress, signal } = {}) {
+    return new Promise((resolve) => {
+      const checked = checkParams(params, this.#info.capabilities);
+      resolve(this.#enqueue(() => this.#backend.run(checked, onProgress, signal), signal));
+    });
+  }
+
   async surfaces() {
-    return structuredClone(this.#surfaces);
+    return structuredClone(this.#info.surfaces);
+  }
+
+  capabilities() {
+    return structuredClone(this.#info.capabilities);
+  }
+
+  surfacePreview(params, { signal } = {}) {
+    return new Promise((resolve) => {
+      if (!this.#info.capabilities.surfacePreview) throw unsupported('surfacePreview');
+      const checked = checkParams(params, this.#info.capabilities);
+      resolve(this.#enqueue(() => this.#backend.call('surfacePreview', [checked], { signal }), signal));
+    });
+  }
+
+  memory() {
+    return this.#enqueue(() => this.#backend.call('memory', []).then((value) => ({ ok: true, ...value })));
   }
 
   dispose() {
@@ -243,7 +331,7 @@ export async function createPHex(options = {}) {
   const useWorker = (options.worker ?? true) && typeof Worker === 'function';
   const backend = useWorker ? new WorkerBackend() : new LocalBackend();
   const engine = await backend.start();
-  return new PHex(backend, { version: engine.version, surfaces: engine.surfaces });
+  return new PHex(backend, { version: engine.version, surfaces: engine.surfaces, capabilities: engine.capabilities });
 }
 
 /**
@@ -270,14 +358,79 @@ export function triangulateFaces(mesh) {
   return { positions: Float32Array.from(positions), index, faceOfTriangle };
 }
 
-/** The mesh as Wavefront OBJ text (1-based indices, full double precision), as `phex run --out` writes it. */
+/** Face corners of a polygon mesh, or of a triangulation ({positions, triangles}) as a mesh of triangles. */
+function polygonsOf(mesh) {
+  if (mesh.faceOffsets) return mesh;
+  const faceOffsets = new Uint32Array(mesh.triangles.length / 3 + 1);
+  for (let f = 0; f < faceOffsets.length; f++) faceOffsets[f] = 3 * f;
+  return { positions: mesh.positions, faceOffsets, faceIndices: mesh.triangles };
+}
+
+/** Area of each face (model units squared): the length of its vector area, exact for planar faces. */
+export function faceAreas(mesh) {
+  const { positions: p, faceOffsets, faceIndices } = polygonsOf(mesh);
+  const areas = new Float64Array(faceOffsets.length - 1);
+  for (let f = 0; f < areas.length; f++) {
+    let x = 0;
+    let y = 0;
+    let z = 0;
+    const first = faceOffsets[f];
+    const n = faceOffsets[f + 1] - first;
+    for (let i = 0; i < n; i++) {
+      const a = 3 * faceIndices[first + i];
+      const b = 3 * faceIndices[first + ((i + 1) % n)];
+      x += p[a + 1] * p[b + 2] - p[a + 2] * p[b + 1];
+      y += p[a + 2] * p[b] - p[a] * p[b + 2];
+      z += p[a] * p[b + 1] - p[a + 1] * p[b];
+    }
+    areas[f] = 0.5 * Math.hypot(x, y, z);
+  }
+  return areas;
+}
+
+/**
+ * The mesh (or a triangulation) as Wavefront OBJ text (1-based indices, full double precision), as
+ * `phex run --out` writes it.
+ */
 export function meshToOBJ(mesh) {
-  const { positions, faceOffsets, faceIndices } = mesh;
-  const lines = ['# phex P-Hex mesh'];
+  const { positions, faceOffsets, faceIndices } = polygonsOf(mesh);
+  const lines = [mesh.faceOffsets ? '# phex P-Hex mesh' : '# phex triangulation'];
   for (let i = 0; i < positions.length; i += 3) lines.push(`v ${positions[i]} ${positions[i + 1]} ${positions[i + 2]}`);
   for (let f = 0; f + 1 < faceOffsets.length; f++) {
     const corners = Array.from(faceIndices.subarray(faceOffsets[f], faceOffsets[f + 1]), (v) => v + 1);
     lines.push(`f ${corners.join(' ')}`);
+  }
+  return `${lines.join('\n')}\n`;
+}
+
+/**
+ * The mesh (or a triangulation) as ASCII PLY text with full double precision; `faceValues` adds named
+ * per-face properties (e.g. {planarity: metrics.planarity}), each of length face count.
+ */
+export function meshToPLY(mesh, faceValues = {}) {
+  const { positions, faceOffsets, faceIndices } = polygonsOf(mesh);
+  const faceCount = faceOffsets.length - 1;
+  const extra = Object.entries(faceValues);
+  for (const [name, values] of extra) {
+    if (values.length !== faceCount) throw new PHexError('invalid_parameter', `faceValues.${name} has ${values.length} values for ${faceCount} faces`);
+  }
+  const lines = [
+    'ply',
+    'format ascii 1.0',
+    'comment phex P-Hex mesh',
+    `element vertex ${positions.length / 3}`,
+    'property double x',
+    'property double y',
+    'property double z',
+    `element face ${faceCount}`,
+    'property list uchar uint vertex_indices',
+    ...extra.map(([name]) => `property double ${name}`),
+    'end_header',
+  ];
+  for (let i = 0; i < positions.length; i += 3) lines.push(`${positions[i]} ${positions[i + 1]} ${positions[i + 2]}`);
+  for (let f = 0; f < faceCount; f++) {
+    const corners = faceIndices.subarray(faceOffsets[f], faceOffsets[f + 1]);
+    lines.push([corners.length, ...corners, ...extra.map(([, values]) => values[f])].join(' '));
   }
   return `${lines.join('\n')}\n`;
 }

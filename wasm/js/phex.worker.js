@@ -26,19 +26,47 @@ function moduleOptions() {
   return { locateFile: (file) => (file.endsWith('.wasm') ? wasmUrl.href : new URL(file, import.meta.url).href) };
 }
 
+/** What this core build can do beyond analytic surfaces; a build without a capabilities() binding declares nothing. */
+function capabilitiesOf(core) {
+  const declared = typeof core.capabilities === 'function' ? core.capabilities() : {};
+  return {
+    meshInput: Boolean(declared.meshInput),
+    meshFormats: declared.meshFormats ?? (declared.meshInput ? ['obj', 'off', 'ply', 'stl'] : []),
+    methods: declared.methods ?? [],
+    fields: declared.fields ?? [],
+    lowerBound: Boolean(declared.lowerBound),
+    surfacePreview: typeof core.surfacePreview === 'function',
+    memory: true,
+  };
+}
+
+/** The binding's answer in the {ok, ...} form phex.js settles, for bindings that return plain values. */
+const answer = (raw) => (raw && typeof raw === 'object' && 'ok' in raw ? raw : { ok: true, ...raw });
+
 /**
- * Instantiates phex_core and returns a thin synchronous engine over it. run() returns the raw
- * result object of the binding ({ok: true, ...} or {ok: false, code, message}); it throws only when
- * the wasm itself failed (a trap), after which the engine must not be used again.
+ * Instantiates phex_core and returns a thin synchronous engine over it. Its methods return the raw
+ * answers of the binding ({ok: true, ...} or {ok: false, code, message}); they throw only when the
+ * wasm itself failed (a trap), after which the engine must not be used again.
  */
 export async function loadEngine() {
   const core = await createPHexModule(moduleOptions());
   return {
     version: core.version(),
     surfaces: core.surfaces(),
+    capabilities: capabilitiesOf(core),
     run(params, onProgress) {
       const report = onProgress ? (stage, fraction, message) => onProgress({ stage, fraction, message }) : undefined;
       return core.run(params, report);
+    },
+    surfacePreview(params) {
+      return answer(core.surfacePreview(params));
+    },
+    /** Heap size, and the bytes malloc has handed out where the binding can tell (else null). */
+    memory() {
+      return {
+        heapBytes: typeof core.heapBytes === 'function' ? core.heapBytes() : core.HEAPU8.byteLength,
+        usedBytes: typeof core.mallocedBytes === 'function' ? core.mallocedBytes() : null,
+      };
     },
   };
 }
@@ -53,16 +81,18 @@ function buffersOf(value, found = new Set()) {
 function serve() {
   const ready = loadEngine();
   ready.then(
-    (engine) => postMessage({ type: 'ready', version: engine.version, surfaces: engine.surfaces }),
+    ({ version, surfaces, capabilities }) => postMessage({ type: 'ready', info: { version, surfaces, capabilities } }),
     (error) => postMessage({ type: 'failed', message: `could not load the phex wasm module: ${error?.message ?? error}` }),
   );
+  const METHODS = ['run', 'surfacePreview', 'memory'];
   addEventListener('message', async ({ data }) => {
-    if (data?.type !== 'run') return;
+    if (data?.type !== 'call' || !METHODS.includes(data.method)) return;
     const engine = await ready;
-    const progress = (p) => postMessage({ type: 'progress', id: data.id, ...p });
+    const args = [...data.args];
+    if (data.method === 'run' && data.progress) args.push((p) => postMessage({ type: 'progress', id: data.id, ...p }));
     try {
-      const result = engine.run(data.params, progress);
-      postMessage({ type: 'result', id: data.id, result }, buffersOf(result));
+      const value = engine[data.method](...args);
+      postMessage({ type: 'reply', id: data.id, value }, buffersOf(value));
     } catch (error) {
       // A trap leaves the wasm instance unusable: tell phex.js to replace this worker.
       postMessage({ type: 'crashed', id: data.id, message: String(error?.message ?? error) });

@@ -20,13 +20,13 @@ enum class Duality { Dupin, Tangent };
 // homothetic copy of the Dupin indicatrix) through the vertex and the projections of the other two onto
 // its tangent plane; the triangle's dual vertex is the average of the three conic centres. In a parabolic
 // region (Gaussian curvatures of differing signs, or |K| h^2 below 1e-8) the centroid is used (§6 step 1).
-DualMesh dupinDual(const Triangulation& triangulation, const ParametricSurface& surface);
+DualMesh dupinDual(const Triangulation& triangulation, const Surface& surface);
 
 // Tangent duality (§4.1): the dual vertex of each triangle is the intersection of the tangent planes at
 // its three vertices. Where the planes are nearly parallel (near parabolic points or on tiny triangles)
 // the intersection is ill-posed, and the triangle's centroid is used instead (§6 step 1).
 // Throws Error(InvalidInput) for a non-manifold triangulation.
-DualMesh tangentDual(const Triangulation& triangulation, const ParametricSurface& surface);
+DualMesh tangentDual(const Triangulation& triangulation, const Surface& surface);
 
 // One-ring of every vertex: the incident triangles in CCW order; `closed[v]` is false on the boundary.
 struct VertexRings {

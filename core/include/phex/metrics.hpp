@@ -16,6 +16,8 @@ FacePlane leastSquaresPlane(const PolyMesh& mesh, int face);
 
 // Distance of the face's farthest vertex from its least-squares plane, divided by the face's mean edge length.
 double facePlanarity(const PolyMesh& mesh, int face);
+// True when two non-adjacent edges of the closed polygon cross or touch, or an edge is degenerate.
+bool polygonSelfIntersects(const std::vector<Vec2>& polygon);
 // True when two non-adjacent edges of the face cross (seen in its least-squares plane) or an edge is degenerate.
 bool faceSelfIntersects(const PolyMesh& mesh, int face);
 

@@ -58,6 +58,7 @@ class ParametricSurface : public Surface {
   mutable std::vector<Vec2> seedParams_;
 };
 
-using SurfacePtr = std::shared_ptr<const ParametricSurface>;
+using SurfacePtr = std::shared_ptr<const Surface>;
+using ParametricSurfacePtr = std::shared_ptr<const ParametricSurface>;
 
 }  // namespace phex

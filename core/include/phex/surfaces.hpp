@@ -27,6 +27,6 @@ using SurfaceParams = std::map<std::string, double>;
 const std::vector<SurfaceSpec>& analyticSurfaces();
 // Builds the named surface; parameters not given take their defaults. Throws
 // Error(InvalidParameter) for an unknown name, an unknown parameter or a value out of range.
-SurfacePtr makeSurface(const std::string& name, const SurfaceParams& params = {});
+ParametricSurfacePtr makeSurface(const std::string& name, const SurfaceParams& params = {});
 
 }  // namespace phex

@@ -1,5 +1,7 @@
-// phex — regular triangulations of a parametric surface.
+// phex — triangulations of a surface and their checks (§4.2, §5).
 #pragma once
+#include <map>
+#include <string>
 #include <vector>
 
 #include "phex/mesh.hpp"
@@ -9,8 +11,13 @@ namespace phex {
 
 struct Triangulation {
   TriMesh mesh;
-  std::vector<Vec2> uv;  // #V parameters of the vertices on the surface
+  std::vector<Vec2> uv;  // #V parameters when laid in the parameter domain of a ParametricSurface; else empty
+  std::vector<std::vector<Vec3>> fieldLines;  // curves the method traced (base curves, conjugate lines), for display
+  std::vector<std::string> notes;             // what the method had to do, e.g. where a lower bound acted
 };
+
+// The local geometry at every vertex: exact from `uv` on a parametric surface, else from closestPoint.
+std::vector<LocalGeometry> vertexGeometry(const Triangulation& triangulation, const Surface& surface);
 
 // Edge length that gives about `faces` hexagons (one per interior vertex) on the surface.
 double cellForFaceCount(const ParametricSurface& surface, int faces);
@@ -19,5 +26,20 @@ double cellForFaceCount(const ParametricSurface& surface, int faces);
 // to equilateral in 3D for edge length `cell`, every other row shifted by half a step. Every interior
 // vertex has valence 6. Periodic directions close up without a seam.
 Triangulation latticeTriangulation(const ParametricSurface& surface, double cell);
+
+// What a triangulation promises for its dual P-Hex mesh (§4.2): every interior vertex's star checked in its
+// tangent plane with the vertex's Dupin indicatrix — each incident triangle, taken as the fundamental
+// triangle of a symmetric star, must satisfy Proposition 4 (K > 0) or 5 (K < 0); valences; edge lengths.
+// Stars at parabolic or planar points (classify with tolerance 1e-6 at the mean edge length) cannot be
+// judged this way (§5.3) and are listed apart.
+struct TriangulationCheck {
+  int vertices = 0, interiorVertices = 0, boundaryVertices = 0;
+  std::map<int, int> interiorValence;  // valence -> count, interior vertices only
+  double regularFraction = 0.0;        // interior vertices of valence 6 / interior vertices
+  std::vector<int> invalidStars;       // interior vertices whose star fails Proposition 4 / 5
+  std::vector<int> parabolicStars;     // interior vertices where the indicatrix degenerates (not checkable)
+  double edgeMin = 0, edgeMax = 0, edgeMean = 0;
+};
+TriangulationCheck checkTriangulation(const Triangulation& triangulation, const Surface& surface);
 
 }  // namespace phex
