@@ -7,6 +7,8 @@
 #include <phex/error.hpp>
 #include <phex/pipeline.hpp>
 
+#include <malloc.h>
+
 #include <cmath>
 #include <string>
 
@@ -101,6 +103,23 @@ val resultToJs(const phex::PipelineResult& r) {
   metrics.set("planarityMax", m.planarityMax);
   metrics.set("planarityMean", m.planarityMean);
   metrics.set("selfIntersectingCount", m.selfIntersectingCount);
+  metrics.set("planarityDiagonals", copyArray("Float64Array", m.planarityDiagonals.data(), m.planarityDiagonals.size()));
+  metrics.set("convex", copyArray("Uint8Array", m.convex.data(), m.convex.size()));
+  metrics.set("faceArea", copyArray("Float64Array", m.faceArea.data(), m.faceArea.size()));
+  metrics.set("convexityMismatch", copyArray("Uint8Array", m.convexityMismatch.data(), m.convexityMismatch.size()));
+  metrics.set("convexityMismatchCount", m.convexityMismatchCount);
+  metrics.set("regularity", copyArray("Float64Array", m.regularity.data(), m.regularity.size()));
+  metrics.set("regularityMean", m.regularityMean);
+  metrics.set("boundaryFace", copyArray("Uint8Array", r.dual.boundaryFace.data(), r.dual.boundaryFace.size()));
+  metrics.set("edgeLengthMin", m.edgeLengthMin);
+  metrics.set("edgeLengthMax", m.edgeLengthMax);
+  metrics.set("edgeLengthMean", m.edgeLengthMean);
+  metrics.set("faceAreaMin", m.faceAreaMin);
+  metrics.set("faceAreaMax", m.faceAreaMax);
+  metrics.set("faceAreaMean", m.faceAreaMean);
+  val valence = val::object();
+  for (const auto& [k, count] : m.vertexValence) valence.set(std::to_string(k), count);
+  metrics.set("vertexValence", valence);
   metrics.set("surfaceDistance", copyArray("Float64Array", m.surfaceDistance.data(), m.surfaceDistance.size()));
   metrics.set("surfaceDistanceMax", m.surfaceDistanceMax);
   metrics.set("surfaceDistanceMean", m.surfaceDistanceMean);
@@ -183,10 +202,17 @@ val surfaces() {
 
 std::string version() { return "0.1.0"; }
 
+double heapBytes() { return static_cast<double>(emscripten::val::module_property("HEAPU8")["byteLength"].as<double>()); }
+
+// Bytes malloc has handed out and not taken back: flat across runs when nothing leaks.
+double mallocedBytes() { return static_cast<double>(mallinfo().uordblks); }
+
 }  // namespace
 
 EMSCRIPTEN_BINDINGS(phex) {
   emscripten::function("run", &run);
   emscripten::function("surfaces", &surfaces);
   emscripten::function("version", &version);
+  emscripten::function("heapBytes", &heapBytes);
+  emscripten::function("mallocedBytes", &mallocedBytes);
 }

@@ -1,6 +1,6 @@
 #include "phex/duality.hpp"
 
-#include <Eigen/LU>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
@@ -83,32 +83,92 @@ bool plausible(const Vec3& x, const TriangleFrame& fr) {
   return x.allFinite() && (x - fr.centroid).norm() <= 0.75 * fr.longestEdge;
 }
 
-// The dual polygon mesh: one face per interior vertex, through the points of its incident triangles in
-// CCW order. `U` holds the dual point of every triangle.
-DualMesh assembleDual(const TriMesh& T, const Points& U, int fallbacks) {
+// The point nearest to `start` that lies on all the given tangent planes, as far as they determine it: a
+// minimum-norm least-squares correction, so directions the planes leave free (a developable's ruling, two
+// nearly parallel planes) keep `start`'s coordinate instead of running off.
+template <int Planes>
+Vec3 nearestOnPlanes(const Eigen::Matrix<double, Planes, 3>& normals, const Eigen::Matrix<double, Planes, 1>& offsets,
+                     const Vec3& start) {
+  Eigen::JacobiSVD<Eigen::Matrix<double, Planes, 3>> svd(normals, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  svd.setThreshold(1e-9);
+  return start + svd.solve(offsets - normals * start);
+}
+
+// The dual polygon mesh (§4.1, §6 step 4): one face per vertex of the triangulation, through the dual points
+// of its incident triangles in CCW order. A boundary vertex's open fan is closed into a proper polygon by the
+// dual points of its two boundary edges — each on the line where the tangent planes at the edge's ends meet,
+// nearest the edge's midpoint, and shared with the neighbouring boundary face — and, where the boundary turns
+// by more than 30 degrees, the vertex itself as the panel's corner. `U` holds the dual point of every
+// triangle. Boundary faces lie in the vertex's tangent plane as interior ones do, so planarization treats
+// them alike.
+DualMesh assembleDual(const TriMesh& T, const Points& U, const std::vector<LocalGeometry>& geo, int fallbacks) {
   const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
   DualMesh dual;
   dual.fallbackCount = fallbacks;
   const VertexRings rings = vertexRings(T);
-  std::vector<int> newId(nf, -1);
+  std::vector<int> triangleId(nf, -1);
+  std::vector<Vec3> points;
+  auto triangleVertex = [&](int f) {
+    if (triangleId[f] < 0) {
+      triangleId[f] = static_cast<int>(points.size());
+      points.push_back(U.row(f).transpose());
+      dual.vertexTriangle.push_back(f);
+    }
+    return triangleId[f];
+  };
+  std::unordered_map<long long, int> edgeId;
+  auto edgeVertex = [&](int a, int b) {
+    const long long key = static_cast<long long>(std::min(a, b)) * nv + std::max(a, b);
+    auto [it, added] = edgeId.emplace(key, static_cast<int>(points.size()));
+    if (added) {
+      Eigen::Matrix<double, 2, 3> N;
+      N << geo[a].normal.transpose(), geo[b].normal.transpose();
+      const Eigen::Vector2d d(geo[a].normal.dot(geo[a].point), geo[b].normal.dot(geo[b].point));
+      const Vec3 mid = 0.5 * (geo[a].point + geo[b].point);
+      Vec3 x = nearestOnPlanes<2>(N, d, mid);
+      if (!x.allFinite() || (x - mid).norm() > 0.75 * (geo[a].point - geo[b].point).norm()) x = mid;
+      points.push_back(x);
+      dual.vertexTriangle.push_back(-1);
+    }
+    return it->second;
+  };
+  auto corner = [&](int f, int v) {
+    int k = 0;
+    while (T.F(f, k) != v) ++k;
+    return k;
+  };
   std::vector<int> ids;
   for (int v = 0; v < nv; ++v) {
-    if (!rings.closed[v] || rings.triangles[v].size() < 3) continue;
+    const std::vector<int>& fan = rings.triangles[v];
+    if (fan.empty() || (rings.closed[v] && fan.size() < 3)) continue;
     ids.clear();
-    for (int f : rings.triangles[v]) {
-      if (newId[f] < 0) {
-        newId[f] = static_cast<int>(dual.vertexTriangle.size());
-        dual.vertexTriangle.push_back(f);
+    if (rings.closed[v]) {
+      for (int f : fan) ids.push_back(triangleVertex(f));
+    } else {
+      const int first = T.F(fan.front(), (corner(fan.front(), v) + 1) % 3);  // boundary edge v -> first
+      const int last = T.F(fan.back(), (corner(fan.back(), v) + 2) % 3);     // boundary edge v -> last
+      ids.push_back(edgeVertex(v, first));
+      for (int f : fan) ids.push_back(triangleVertex(f));
+      ids.push_back(edgeVertex(v, last));
+      double fanAngle = 0;
+      for (int f : fan) {
+        const int k = corner(f, v);
+        const Vec3 e1 = T.V.row(T.F(f, (k + 1) % 3)) - T.V.row(v), e2 = T.V.row(T.F(f, (k + 2) % 3)) - T.V.row(v);
+        fanAngle += std::atan2(e1.cross(e2).norm(), e1.dot(e2));
       }
-      ids.push_back(newId[f]);
+      if (fanAngle < 150.0 * M_PI / 180.0) {
+        ids.push_back(static_cast<int>(points.size()));
+        points.push_back(geo[v].point);
+        dual.vertexTriangle.push_back(-1);
+      }
     }
     dual.mesh.addFace(ids);
     dual.faceVertex.push_back(v);
+    dual.boundaryFace.push_back(rings.closed[v] ? 0 : 1);
   }
-  dual.mesh.V.resize(static_cast<int>(dual.vertexTriangle.size()), 3);
-  for (int i = 0; i < static_cast<int>(dual.vertexTriangle.size()); ++i) dual.mesh.V.row(i) = U.row(dual.vertexTriangle[i]);
-  if (dual.mesh.faceCount() == 0)
-    throw Error(ErrorCode::CannotTile, "the triangulation has no interior vertex, so its dual has no face");
+  dual.mesh.V.resize(static_cast<int>(points.size()), 3);
+  for (int i = 0; i < static_cast<int>(points.size()); ++i) dual.mesh.V.row(i) = points[i].transpose();
+  if (dual.mesh.faceCount() == 0) throw Error(ErrorCode::CannotTile, "the triangulation has no vertex with a face around it");
   return dual;
 }
 
@@ -147,7 +207,7 @@ DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
     fallbacks += parabolic;
     U.row(f) = x.transpose();
   }
-  return assembleDual(T, U, fallbacks);
+  return assembleDual(T, U, geo, fallbacks);
 }
 
 DualMesh tangentDual(const Triangulation& tri, const Surface& surface) {
@@ -165,17 +225,17 @@ DualMesh tangentDual(const Triangulation& tri, const Surface& surface) {
       A.row(c) = g.normal.transpose();
       b(c) = g.normal.dot(g.point);
     }
-    // §4.1: the three tangent planes meet in one point; near-parallel planes make that point run off
-    // (or not exist), and then §6's fallback, the centroid, is used.
-    const Eigen::FullPivLU<Eigen::Matrix3d> lu(A);
-    Vec3 x = lu.isInvertible() ? Vec3(lu.solve(b)) : fr.centroid;
-    if (!lu.isInvertible() || !plausible(x, fr)) {
+    // §4.1: the three tangent planes meet in one point. Where they leave a direction free (a developable's
+    // ruling) the point nearest the centroid is taken; where they are nearly parallel the point runs off
+    // and §6's fallback, the centroid, is used.
+    Vec3 x = nearestOnPlanes<3>(A, b, fr.centroid);
+    if (!plausible(x, fr)) {
       x = fr.centroid;
       ++fallbacks;
     }
     U.row(f) = x.transpose();
   }
-  return assembleDual(T, U, fallbacks);
+  return assembleDual(T, U, geo, fallbacks);
 }
 
 }  // namespace phex

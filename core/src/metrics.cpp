@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace phex {
 namespace {
@@ -68,18 +69,87 @@ bool polygonSelfIntersects(const std::vector<Vec2>& p) {
   return false;
 }
 
-bool faceSelfIntersects(const PolyMesh& mesh, int face) {
+namespace {
+
+// The face's corners in its least-squares plane, centred at their centroid; counterclockwise when the face's
+// orientation agrees with `up` (the plane's normal is turned towards it).
+std::vector<Vec2> planarCorners(const PolyMesh& mesh, int face) {
   const int n = mesh.faceSize(face);
   const int* ids = mesh.face(face);
   const FacePlane pl = leastSquaresPlane(mesh, face);
-  const Vec3 ex = (std::abs(pl.normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(pl.normal).normalized();
-  const Vec3 ey = pl.normal.cross(ex);
+  Vec3 normal = pl.normal;
+  Vec3 area = Vec3::Zero();  // the face's vector area orients the plane like the face
+  for (int i = 0; i < n; ++i) area += mesh.vertex(ids[i]).cross(mesh.vertex(ids[(i + 1) % n]));
+  if (area.dot(normal) < 0) normal = -normal;
+  const Vec3 ex = (std::abs(normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(normal).normalized();
+  const Vec3 ey = normal.cross(ex);
   std::vector<Vec2> p(n);
   for (int i = 0; i < n; ++i) {
     const Vec3 d = mesh.vertex(ids[i]) - pl.centroid;
     p[i] = Vec2(d.dot(ex), d.dot(ey));
   }
-  return polygonSelfIntersects(p);
+  return p;
+}
+
+double signedArea(const std::vector<Vec2>& p) {
+  double a = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) a += cross2(p[i], p[(i + 1) % p.size()]);
+  return 0.5 * a;
+}
+
+bool isConvex(const std::vector<Vec2>& p) {
+  const int n = static_cast<int>(p.size());
+  for (int i = 0; i < n; ++i)
+    if (cross2(p[(i + 1) % n] - p[i], p[(i + 2) % n] - p[(i + 1) % n]) < 0) return false;
+  return !polygonSelfIntersects(p);
+}
+
+}  // namespace
+
+bool faceSelfIntersects(const PolyMesh& mesh, int face) { return polygonSelfIntersects(planarCorners(mesh, face)); }
+
+double facePlanarityDiagonals(const PolyMesh& mesh, int face) {
+  const int n = mesh.faceSize(face);
+  if (n < 4) return 0.0;
+  const int* ids = mesh.face(face);
+  double sum = 0;
+  for (int i = 0; i < n; ++i) {
+    const Vec3 a = mesh.vertex(ids[i]), b = mesh.vertex(ids[(i + 1) % n]), c = mesh.vertex(ids[(i + 2) % n]),
+               d = mesh.vertex(ids[(i + 3) % n]);
+    const Vec3 across = (c - a).cross(d - b);  // normal to both diagonals a-c and b-d
+    const double scale = across.norm() * 0.5 * ((c - a).norm() + (d - b).norm());
+    const double gap = scale > 0 ? across.dot(b - a) / scale : 0.0;  // diagonal-line distance / mean diagonal
+    sum += gap * gap;
+  }
+  return 100.0 * std::sqrt(sum / n);
+}
+
+double affineRegularityDefect(const std::vector<Vec2>& u, bool quasiRegular) {
+  if (u.size() != 6) return -1.0;
+  static const double s = 2.0 / std::sqrt(3.0);
+  static const Vec2 regular[6] = {{1, 0}, {0.5, 0.5 * std::sqrt(3.0)}, {-0.5, 0.5 * std::sqrt(3.0)},
+                                  {-1, 0}, {-0.5, -0.5 * std::sqrt(3.0)}, {0.5, -0.5 * std::sqrt(3.0)}};
+  static const Vec2 quasi[6] = {{1, -s}, {1, s}, {0, s / 2}, {-1, s}, {-1, -s}, {0, -s / 2}};
+  const Vec2* t = quasiRegular ? quasi : regular;
+  Vec2 c = Vec2::Zero();
+  for (const Vec2& x : u) c += x / 6.0;
+  double radius2 = 0;
+  for (const Vec2& x : u) radius2 += (x - c).squaredNorm() / 6.0;
+  if (!(radius2 > 0)) return -1.0;
+  Eigen::Matrix2d tt = Eigen::Matrix2d::Zero();
+  for (int i = 0; i < 6; ++i) tt += t[i] * t[i].transpose();
+  const Eigen::Matrix2d ttInverse = tt.inverse();
+  double best = std::numeric_limits<double>::infinity();
+  for (int shift = 0; shift < 6; ++shift) {
+    Eigen::Matrix2d ut = Eigen::Matrix2d::Zero();
+    for (int i = 0; i < 6; ++i) ut += (u[(i + shift) % 6] - c) * t[i].transpose();
+    const Eigen::Matrix2d A = ut * ttInverse;  // least-squares affine map of the template onto the face
+    if (A.determinant() <= 0) continue;        // a mirror image is a different corner order
+    double residual = 0;
+    for (int i = 0; i < 6; ++i) residual += (u[(i + shift) % 6] - c - A * t[i]).squaredNorm() / 6.0;
+    best = std::min(best, std::sqrt(residual / radius2));
+  }
+  return std::isfinite(best) ? best : -1.0;
 }
 
 MeshMetrics measure(const PolyMesh& mesh) {
@@ -87,22 +157,67 @@ MeshMetrics measure(const PolyMesh& mesh) {
   m.vertexCount = static_cast<int>(mesh.V.rows());
   m.faceCount = mesh.faceCount();
   m.planarity.resize(m.faceCount);
+  m.planarityDiagonals.resize(m.faceCount);
   m.selfIntersecting.resize(m.faceCount);
-  double sum = 0;
+  m.convex.resize(m.faceCount);
+  m.faceArea.resize(m.faceCount);
+  double sum = 0, edgeSum = 0, areaSum = 0;
+  long edges = 0;
+  m.edgeLengthMin = m.faceAreaMin = std::numeric_limits<double>::infinity();
+  std::vector<int> facesAtVertex(m.vertexCount, 0);
   for (int f = 0; f < m.faceCount; ++f) {
+    const std::vector<Vec2> corners = planarCorners(mesh, f);
     m.planarity[f] = facePlanarity(mesh, f);
-    m.selfIntersecting[f] = faceSelfIntersects(mesh, f) ? 1 : 0;
+    m.planarityDiagonals[f] = facePlanarityDiagonals(mesh, f);
+    m.selfIntersecting[f] = polygonSelfIntersects(corners) ? 1 : 0;
+    m.convex[f] = isConvex(corners) ? 1 : 0;
+    m.faceArea[f] = std::abs(signedArea(corners));
+    m.faceAreaMin = std::min(m.faceAreaMin, m.faceArea[f]);
+    m.faceAreaMax = std::max(m.faceAreaMax, m.faceArea[f]);
+    areaSum += m.faceArea[f];
+    for (int i = 0; i < mesh.faceSize(f); ++i) {
+      const int a = mesh.face(f)[i], b = mesh.face(f)[(i + 1) % mesh.faceSize(f)];
+      ++facesAtVertex[a];
+      const double len = (mesh.vertex(a) - mesh.vertex(b)).norm();
+      m.edgeLengthMin = std::min(m.edgeLengthMin, len);
+      m.edgeLengthMax = std::max(m.edgeLengthMax, len);
+      edgeSum += len;
+      ++edges;
+    }
     m.facesBySize[mesh.faceSize(f)]++;
     m.planarityMax = std::max(m.planarityMax, m.planarity[f]);
     sum += m.planarity[f];
     m.selfIntersectingCount += m.selfIntersecting[f];
   }
   m.planarityMean = m.faceCount ? sum / m.faceCount : 0.0;
+  m.edgeLengthMean = edges ? edgeSum / edges : 0.0;
+  m.faceAreaMean = m.faceCount ? areaSum / m.faceCount : 0.0;
+  if (!edges) m.edgeLengthMin = 0;
+  if (!m.faceCount) m.faceAreaMin = 0;
+  for (int c : facesAtVertex) m.vertexValence[c]++;
   return m;
 }
 
 MeshMetrics measure(const PolyMesh& mesh, const Surface& surface) {
   MeshMetrics m = measure(mesh);
+  m.convexityMismatch.assign(m.faceCount, 0);
+  m.regularity.assign(m.faceCount, -1.0);
+  double regularitySum = 0;
+  int regularityCount = 0;
+  for (int f = 0; f < m.faceCount; ++f) {
+    Vec3 centre = Vec3::Zero();
+    for (int i = 0; i < mesh.faceSize(f); ++i) centre += mesh.vertex(mesh.face(f)[i]) / mesh.faceSize(f);
+    const LocalGeometry g = surface.closestPoint(centre);
+    const double h = std::sqrt(m.faceArea[f]);
+    // Parabolic at the face's scale: the indicatrix says nothing about its shape (§3).
+    if (std::abs(g.k2) * h < 1e-3 || std::abs(g.k1) * h < 1e-3) continue;
+    const bool elliptic = g.gaussianCurvature() > 0;
+    m.convexityMismatch[f] = (m.convex[f] != 0) != elliptic && !m.selfIntersecting[f];
+    m.convexityMismatchCount += m.convexityMismatch[f];
+    m.regularity[f] = affineRegularityDefect(planarCorners(mesh, f), !elliptic);
+    if (m.regularity[f] >= 0) regularitySum += m.regularity[f], ++regularityCount;
+  }
+  m.regularityMean = regularityCount ? regularitySum / regularityCount : 0.0;
   const double diagonal = surface.bounds().diagonal().norm();
   m.surfaceDistance.resize(m.vertexCount);
   double sum = 0;

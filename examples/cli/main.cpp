@@ -4,6 +4,7 @@
 #include <phex/mesh_surface.hpp>
 #include <phex/pipeline.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -77,6 +78,8 @@ int parseInt(const std::string& opt, const std::string& text) {
 json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
   json bySize = json::object();
   for (const auto& [size, count] : r.metrics.facesBySize) bySize[std::to_string(size)] = count;
+  json valence = json::object();
+  for (const auto& [k, count] : r.metrics.vertexValence) valence[std::to_string(k)] = count;
   json timings = json::object();
   for (const auto& t : r.timings) timings[t.stage] = t.milliseconds;
   timings["total"] = r.totalMilliseconds;
@@ -94,6 +97,13 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"planarity", {{"max", r.metrics.planarityMax}, {"mean", r.metrics.planarityMean},
                          {"initialMax", r.solve.initialPlanarityMax}}},
           {"invalidFaces", r.metrics.selfIntersectingCount},
+          {"boundaryFaces", std::count(r.dual.boundaryFace.begin(), r.dual.boundaryFace.end(), 1)},
+          {"convexityMismatches", r.metrics.convexityMismatchCount},
+          {"regularityMean", r.metrics.regularityMean},
+          {"planarityDiagonalsMaxPercent", *std::max_element(r.metrics.planarityDiagonals.begin(), r.metrics.planarityDiagonals.end())},
+          {"edgeLength", {{"min", r.metrics.edgeLengthMin}, {"max", r.metrics.edgeLengthMax}, {"mean", r.metrics.edgeLengthMean}}},
+          {"faceArea", {{"min", r.metrics.faceAreaMin}, {"max", r.metrics.faceAreaMax}, {"mean", r.metrics.faceAreaMean}}},
+          {"vertexValence", valence},
           {"surfaceDistance", {{"max", r.metrics.surfaceDistanceMax}, {"mean", r.metrics.surfaceDistanceMean}}},
           {"displacementMax", r.solve.displacementMax},
           {"dualFallbacks", r.dual.fallbackCount},

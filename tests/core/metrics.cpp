@@ -35,3 +35,42 @@ TEST_CASE("metrics: self-intersection is detected") {
   CHECK(mm.selfIntersectingCount == 1);
   CHECK(mm.facesBySize.at(6) == 1);
 }
+
+TEST_CASE("metrics: affine regularity against the regular and quasi-regular templates (§4.2)") {
+  Eigen::Matrix2d A;
+  A << 2.0, 0.7, -0.3, 1.1;  // any orientation-preserving affine map
+  const Vec2 shift(5, -2);
+  const double s = 2 / std::sqrt(3.0);
+  const Vec2 quasi[6] = {{1, -s}, {1, s}, {0, s / 2}, {-1, s}, {-1, -s}, {0, -s / 2}};
+  std::vector<Vec2> regularImage, quasiImage;
+  for (int i = 0; i < 6; ++i) {
+    regularImage.push_back(A * Vec2(std::cos(i * M_PI / 3), std::sin(i * M_PI / 3)) + shift);
+    quasiImage.push_back(A * quasi[(i + 2) % 6] + shift);  // any starting corner
+  }
+  CHECK(affineRegularityDefect(regularImage, false) < 1e-12);
+  CHECK(affineRegularityDefect(quasiImage, true) < 1e-12);
+  CHECK(affineRegularityDefect(regularImage, true) > 0.1);
+  CHECK(affineRegularityDefect(quasiImage, false) > 0.1);
+  regularImage[0] += Vec2(0.2, 0.1);
+  CHECK(affineRegularityDefect(regularImage, false) > 0.01);
+  CHECK(affineRegularityDefect({Vec2(0, 0), Vec2(1, 0), Vec2(0, 1)}, false) == -1.0);
+}
+
+TEST_CASE("metrics: diagonal planarity, convexity, areas, edges and valences") {
+  const PolyMesh flat = hexagon(0, false);
+  const MeshMetrics m = measure(flat);
+  CHECK(m.planarityDiagonals[0] < 1e-12);
+  CHECK(m.convex[0] == 1);
+  CHECK(m.faceArea[0] == Approx(3 * std::sqrt(3.0) / 2).epsilon(1e-12));  // regular hexagon of side 1
+  CHECK(m.edgeLengthMin == Approx(1.0));
+  CHECK(m.edgeLengthMax == Approx(1.0));
+  CHECK(m.vertexValence.at(1) == 6);
+  CHECK(measure(hexagon(0.05, false)).planarityDiagonals[0] > 1.0);  // percent
+  CHECK(measure(hexagon(0, true)).convex[0] == 0);
+  // A dart (non-convex, simple) hexagon.
+  PolyMesh dart = flat;
+  dart.V.row(0) << 0.2, 0, 0;
+  const MeshMetrics d = measure(dart);
+  CHECK(d.convex[0] == 0);
+  CHECK(d.selfIntersecting[0] == 0);
+}

@@ -1,5 +1,6 @@
 // phex — from a triangulation to its dual hexagonal mesh (§4.1, §6).
 #pragma once
+#include <cstdint>
 #include <vector>
 
 #include "phex/mesh.hpp"
@@ -7,10 +8,14 @@
 
 namespace phex {
 
+// The dual polygon mesh of a triangulation: one face per triangulation vertex. Faces around boundary vertices
+// are closed with points on the boundary edges (and the vertex itself at boundary corners), so the mesh has a
+// clean border of planar polygons.
 struct DualMesh {
-  PolyMesh mesh;                 // one face per interior vertex of the triangulation
-  std::vector<int> faceVertex;   // #faces: the triangulation vertex each face is dual to
-  std::vector<int> vertexTriangle;  // #V: the triangle each vertex is dual to
+  PolyMesh mesh;
+  std::vector<int> faceVertex;      // #faces: the triangulation vertex each face is dual to
+  std::vector<std::uint8_t> boundaryFace;  // #faces: 1 for faces around boundary vertices
+  std::vector<int> vertexTriangle;  // #V: the triangle each vertex is dual to, -1 for boundary-edge and corner points
   int fallbackCount = 0;         // dual vertices placed at the centroid (§6 parabolic fallback)
 };
 

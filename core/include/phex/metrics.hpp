@@ -21,15 +21,40 @@ bool polygonSelfIntersects(const std::vector<Vec2>& polygon);
 // True when two non-adjacent edges of the face cross (seen in its least-squares plane) or an edge is degenerate.
 bool faceSelfIntersects(const PolyMesh& mesh, int face);
 
+// The 4-point planarity measure of libhedra, for comparison: for every run of four consecutive corners, the
+// distance between the lines of its two diagonals over their mean length; the face's value is the root mean
+// square over its runs, in percent.
+double facePlanarityDiagonals(const PolyMesh& mesh, int face);
+
+// How far a hexagon is from the affine image of a template (§4.2, Fig. 12): the regular hexagon (K > 0) or
+// the quasi-regular one, two halves of a regular hexagon juxtaposed back to back (K < 0). The least-squares
+// affine fit over the six cyclic alignments; root mean square residual over the root mean square radius
+// (0 for an exact affine copy). `corners` are in the face's plane, counterclockwise.
+double affineRegularityDefect(const std::vector<Vec2>& corners, bool quasiRegular);
+
 struct MeshMetrics {
   std::vector<double> planarity;          // #faces
+  std::vector<double> planarityDiagonals; // #faces, libhedra's measure in percent
   std::vector<std::uint8_t> selfIntersecting;  // #faces, 1 where the face crosses itself
+  std::vector<std::uint8_t> convex;       // #faces, 1 for a convex polygon
+  std::vector<double> faceArea;           // #faces, area of the polygon in its least-squares plane
   int vertexCount = 0;
   int faceCount = 0;
   std::map<int, int> facesBySize;         // polygon size -> count
   double planarityMax = 0.0;
   double planarityMean = 0.0;
   int selfIntersectingCount = 0;
+  double edgeLengthMin = 0, edgeLengthMax = 0, edgeLengthMean = 0;
+  double faceAreaMin = 0, faceAreaMax = 0, faceAreaMean = 0;
+  std::map<int, int> vertexValence;      // number of faces at a vertex -> count (3 inside a P-Hex mesh)
+  // Filled by measure(mesh, surface), from the Gaussian curvature at each face's centre:
+  // §3: a valid face is convex where K > 0 and non-convex where K < 0 (parabolic faces may be either).
+  std::vector<std::uint8_t> convexityMismatch;  // #faces, 1 where the face contradicts the sign of K
+  int convexityMismatchCount = 0;
+  // affineRegularityDefect of each hexagon against the template the sign of K calls for; -1 where it does not
+  // apply (not a hexagon, or a parabolic face).
+  std::vector<double> regularity;
+  double regularityMean = 0.0;
   // Filled by measure(mesh, surface): vertex distance to the surface over the surface's bounding-box diagonal.
   std::vector<double> surfaceDistance;    // #vertices
   double surfaceDistanceMax = 0.0;
