@@ -51,8 +51,13 @@ test-browser:
 demo: native wasm web
 	@node scripts/serve.js build/web $(PORT)
 
-bench: native wasm
-	@$(NODE) bench/run.mjs
+bench: native wasm web
+	@echo "== pipeline, native and wasm (node)"
+	@node bench/run.mjs
+	@echo "== mesh loading and curvature, native"
+	@build/native/bin/phex_bench_mesh_curvature
+	@echo "== web app in headless Chromium"
+	@node bench/browser.mjs
 
 clean:
 	rm -rf build

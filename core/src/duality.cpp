@@ -94,6 +94,21 @@ Vec3 nearestOnPlanes(const Eigen::Matrix<double, Planes, 3>& normals, const Eige
   return start + svd.solve(offsets - normals * start);
 }
 
+// §4.1: the three tangent planes at the triangle's corners meet in one point. Where they leave a direction
+// free (a developable's ruling) the point nearest the centroid is taken; false where they are nearly parallel
+// and the point runs off (then §6's fallback applies).
+bool tangentPoint(const std::vector<LocalGeometry>& geo, const TriMesh& T, int f, const TriangleFrame& fr, Vec3& x) {
+  Eigen::Matrix3d A;
+  Vec3 b;
+  for (int c = 0; c < 3; ++c) {
+    const LocalGeometry& g = geo[T.F(f, c)];
+    A.row(c) = g.normal.transpose();
+    b(c) = g.normal.dot(g.point);
+  }
+  x = nearestOnPlanes<3>(A, b, fr.centroid);
+  return plausible(x, fr);
+}
+
 // The dual polygon mesh (§4.1, §6 step 4): one face per vertex of the triangulation, through the dual points
 // of its incident triangles in CCW order. A boundary vertex's open fan is closed into a proper polygon by the
 // dual points of its two boundary edges — each on the line where the tangent planes at the edge's ends meet,
@@ -204,6 +219,8 @@ DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
       if (ok && plausible(sum / 3.0, fr)) x = sum / 3.0;
       else parabolic = true;
     }
+    // Where the Dupin conic is undefined the tangent planes may still meet well; §6's centroid is the last resort.
+    if (parabolic) parabolic = !tangentPoint(geo, T, f, fr, x);
     fallbacks += parabolic;
     U.row(f) = x.transpose();
   }
@@ -218,18 +235,8 @@ DualMesh tangentDual(const Triangulation& tri, const Surface& surface) {
   int fallbacks = 0;
   for (int f = 0; f < nf; ++f) {
     const TriangleFrame fr = frameOf(geo, T, f);
-    Eigen::Matrix3d A;
-    Vec3 b;
-    for (int c = 0; c < 3; ++c) {
-      const LocalGeometry& g = geo[T.F(f, c)];
-      A.row(c) = g.normal.transpose();
-      b(c) = g.normal.dot(g.point);
-    }
-    // §4.1: the three tangent planes meet in one point. Where they leave a direction free (a developable's
-    // ruling) the point nearest the centroid is taken; where they are nearly parallel the point runs off
-    // and §6's fallback, the centroid, is used.
-    Vec3 x = nearestOnPlanes<3>(A, b, fr.centroid);
-    if (!plausible(x, fr)) {
+    Vec3 x;
+    if (!tangentPoint(geo, T, f, fr, x)) {
       x = fr.centroid;
       ++fallbacks;
     }

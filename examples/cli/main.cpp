@@ -5,6 +5,8 @@
 #include <phex/pipeline.hpp>
 
 #include <algorithm>
+#include <sys/resource.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -75,6 +77,13 @@ int parseInt(const std::string& opt, const std::string& text) {
   return static_cast<int>(v);
 }
 
+// High-water mark of this process's resident memory (Linux reports kilobytes).
+double peakMemoryMB() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;
+}
+
 json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
   json bySize = json::object();
   for (const auto& [size, count] : r.metrics.facesBySize) bySize[std::to_string(size)] = count;
@@ -109,7 +118,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"dualFallbacks", r.dual.fallbackCount},
           {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
                       {"log", log}}},
-          {"milliseconds", timings}};
+          {"milliseconds", timings},
+          {"peakMemoryMB", peakMemoryMB()}};
 }
 
 int run(const std::vector<std::string>& args) {

@@ -1,0 +1,20 @@
+// One benchmark case in WebAssembly, in a fresh process so the heap high-water mark is this case's own.
+// Usage: node --no-experimental-fetch bench/wasm-case.mjs '<params JSON>'   → one JSON line on stdout.
+import { createPHex } from '../build/pkg/phex.js';
+
+const params = JSON.parse(process.argv[2]);
+const phex = await createPHex({ worker: false });
+const started = performance.now();
+const r = await phex.run(params);
+const wall = performance.now() - started;
+const memory = await phex.memory();
+console.log(JSON.stringify({
+  faces: r.metrics.faceCount,
+  milliseconds: { ...r.timings, wall },
+  iterations: r.solve.iterations,
+  planarityMax: r.metrics.planarityMax,
+  invalidFaces: r.metrics.selfIntersectingCount,
+  surfaceDistanceMax: r.metrics.surfaceDistanceMax,
+  peakMemoryMB: memory.heapBytes / 2 ** 20,
+}));
+phex.dispose();
