@@ -75,6 +75,19 @@ phex::PipelineParams paramsFromJs(const val& o) {
   if (has(o, "mu")) p.mu = number(o, "mu");
   if (has(o, "maxIterations")) p.maxIterations = integer(o, "maxIterations");
   if (has(o, "duality")) p.duality = phex::parseDuality(text(o, "duality"));
+  if (has(o, "method")) p.method = phex::parseTriangulationMethod(text(o, "method"));
+  if (has(o, "field")) p.field = text(o, "field");
+  if (has(o, "lowerBound")) p.lowerBound = number(o, "lowerBound");
+  if (has(o, "mesh")) {
+    const val bytes = o["mesh"];
+    if (!bytes.instanceof(val::global("Uint8Array")))
+      throw phex::Error(phex::ErrorCode::InvalidParameter, "mesh must be a Uint8Array of the file's bytes");
+    phex::MeshInput mesh;
+    mesh.bytes = emscripten::convertJSArrayToNumberVector<std::uint8_t>(bytes);
+    if (has(o, "meshFormat")) mesh.format = text(o, "meshFormat");
+    mesh.name = has(o, "meshName") ? text(o, "meshName") : "mesh";
+    p.mesh = std::move(mesh);
+  }
   if (has(o, "solver")) p.solver = phex::parseMethod(text(o, "solver"));
   return p;
 }
@@ -89,6 +102,31 @@ val resultToJs(const phex::PipelineResult& r) {
   tri.set("positions", copyArray("Float64Array", T.V.data(), static_cast<std::size_t>(T.V.size())));
   std::vector<std::uint32_t> tris(T.F.data(), T.F.data() + T.F.size());
   tri.set("triangles", copyArray("Uint32Array", tris.data(), tris.size()));
+  // Traced direction-field curves as polylines: positions (x, y, z per point) and offsets (#lines + 1).
+  std::vector<double> linePoints;
+  std::vector<std::uint32_t> lineOffsets{0};
+  for (const auto& line : r.triangulation.fieldLines) {
+    for (const phex::Vec3& q : line) linePoints.insert(linePoints.end(), {q.x(), q.y(), q.z()});
+    lineOffsets.push_back(static_cast<std::uint32_t>(linePoints.size() / 3));
+  }
+  val lines = val::object();
+  lines.set("positions", copyArray("Float64Array", linePoints.data(), linePoints.size()));
+  lines.set("offsets", copyArray("Uint32Array", lineOffsets.data(), lineOffsets.size()));
+  tri.set("fieldLines", lines);
+  val notes = val::array();
+  for (const std::string& n : r.triangulation.notes) notes.call<void>("push", n);
+  tri.set("notes", notes);
+  const phex::TriangulationCheck& c = r.check;
+  val check = val::object();
+  check.set("interiorVertices", c.interiorVertices);
+  check.set("regularFraction", c.regularFraction);
+  std::vector<std::uint32_t> invalid(c.invalidStars.begin(), c.invalidStars.end());
+  check.set("invalidStars", copyArray("Uint32Array", invalid.data(), invalid.size()));
+  check.set("parabolicStars", static_cast<int>(c.parabolicStars.size()));
+  check.set("edgeMin", c.edgeMin);
+  check.set("edgeMax", c.edgeMax);
+  check.set("edgeMean", c.edgeMean);
+  tri.set("check", check);
   out.set("triangulation", tri);
 
   val metrics = val::object();
@@ -202,6 +240,49 @@ val surfaces() {
 
 std::string version() { return "0.1.0"; }
 
+val capabilities() {
+  val c = val::object();
+  c.set("meshInput", true);
+  val formats = val::array();
+  for (const char* f : {"obj", "off", "ply", "stl"}) formats.call<void>("push", std::string(f));
+  c.set("meshFormats", formats);
+  val methods = val::array();
+  for (const char* m : {"progressive", "prespecified", "subdivision", "lattice"}) methods.call<void>("push", std::string(m));
+  c.set("methods", methods);
+  val fields = val::array();
+  for (const char* f : {"principal", "angle:DEG", "param", "radial", "diverging", "spiral"}) fields.call<void>("push", std::string(f));
+  c.set("fields", fields);
+  c.set("lowerBound", true);
+  val controls = val::array();
+  for (const std::string& n : phex::subdivisionControls()) controls.call<void>("push", n);
+  c.set("subdivisionControls", controls);
+  val solvers = val::array();
+  for (const char* s : {"local", "planes", "volumes"}) solvers.call<void>("push", std::string(s));
+  c.set("solvers", solvers);
+  return c;
+}
+
+// The surface of `params` (analytic by name, or an uploaded mesh) as a triangle mesh with the principal
+// curvatures at its vertices, for display.
+val surfacePreview(val params) {
+  try {
+    const phex::PipelineParams p = paramsFromJs(params);
+    const phex::SurfacePreview s = phex::surfacePreview(p);
+    val out = val::object();
+    out.set("ok", true);
+    out.set("positions", copyArray("Float64Array", s.mesh.V.data(), static_cast<std::size_t>(s.mesh.V.size())));
+    std::vector<std::uint32_t> tris(s.mesh.F.data(), s.mesh.F.data() + s.mesh.F.size());
+    out.set("triangles", copyArray("Uint32Array", tris.data(), tris.size()));
+    out.set("k1", copyArray("Float64Array", s.k1.data(), s.k1.size()));
+    out.set("k2", copyArray("Float64Array", s.k2.data(), s.k2.size()));
+    return out;
+  } catch (const phex::Error& e) {
+    return errorToJs(phex::errorCodeName(e.code()), e.what());
+  } catch (const std::exception& e) {
+    return errorToJs("internal", e.what());
+  }
+}
+
 double heapBytes() { return static_cast<double>(emscripten::val::module_property("HEAPU8")["byteLength"].as<double>()); }
 
 // Bytes malloc has handed out and not taken back: flat across runs when nothing leaks.
@@ -214,5 +295,7 @@ EMSCRIPTEN_BINDINGS(phex) {
   emscripten::function("surfaces", &surfaces);
   emscripten::function("version", &version);
   emscripten::function("heapBytes", &heapBytes);
+  emscripten::function("capabilities", &capabilities);
+  emscripten::function("surfacePreview", &surfacePreview);
   emscripten::function("mallocedBytes", &mallocedBytes);
 }

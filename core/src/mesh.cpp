@@ -53,6 +53,23 @@ std::string toObj(const TriMesh& mesh) {
   return out;
 }
 
+std::string toPly(const PolyMesh& mesh) {
+  std::string out = "ply\nformat ascii 1.0\ncomment phex P-Hex mesh\nelement vertex " + std::to_string(mesh.V.rows()) +
+                    "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
+                    std::to_string(mesh.faceCount()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
+  char buf[96];
+  for (int i = 0; i < mesh.V.rows(); ++i) {
+    std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g\n", mesh.V(i, 0), mesh.V(i, 1), mesh.V(i, 2));
+    out += buf;
+  }
+  for (int f = 0; f < mesh.faceCount(); ++f) {
+    out += std::to_string(mesh.faceSize(f));
+    for (int i = 0; i < mesh.faceSize(f); ++i) out += ' ' + std::to_string(mesh.face(f)[i]);
+    out += '\n';
+  }
+  return out;
+}
+
 void writeTextFile(const std::string& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
   if (!out) throw Error(ErrorCode::Io, "cannot open '" + path + "' for writing (does its directory exist?)");

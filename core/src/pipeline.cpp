@@ -5,6 +5,10 @@
 #include <sstream>
 
 #include "phex/error.hpp"
+#include "phex/laying.hpp"
+#include "phex/mesh_io.hpp"
+#include "phex/mesh_surface.hpp"
+#include "phex/subdivision.hpp"
 
 namespace phex {
 namespace {
@@ -39,6 +43,70 @@ Duality parseDuality(const std::string& name) {
 
 const char* dualityName(Duality d) { return d == Duality::Dupin ? "dupin" : "tangent"; }
 
+TriangulationMethod parseTriangulationMethod(const std::string& name) {
+  if (name == "lattice") return TriangulationMethod::Lattice;
+  if (name == "progressive") return TriangulationMethod::Progressive;
+  if (name == "prespecified") return TriangulationMethod::Prespecified;
+  if (name == "subdivision") return TriangulationMethod::Subdivision;
+  throw Error(ErrorCode::InvalidParameter,
+              "method must be 'progressive', 'prespecified', 'subdivision' or 'lattice' (got '" + name + "')");
+}
+
+const char* triangulationMethodName(TriangulationMethod m) {
+  switch (m) {
+    case TriangulationMethod::Lattice: return "lattice";
+    case TriangulationMethod::Progressive: return "progressive";
+    case TriangulationMethod::Prespecified: return "prespecified";
+    case TriangulationMethod::Subdivision: return "subdivision";
+  }
+  return "progressive";
+}
+
+const std::vector<std::string>& subdivisionControls() {
+  static const std::vector<std::string> names = {"icosahedron", "egg", "flattened-icosahedron"};
+  return names;
+}
+
+namespace {
+
+TriMesh controlMesh(const std::string& name) {
+  if (name == "icosahedron") return icosahedronControl(1.0);
+  if (name == "egg") return eggControl(1.3, 0.8);
+  if (name == "flattened-icosahedron") return stretchedIcosahedronControl(Vec3(1.2, 1.0, 0.45));
+  std::string known;
+  for (const std::string& n : subdivisionControls()) known += (known.empty() ? "" : ", ") + n;
+  throw Error(ErrorCode::InvalidParameter,
+              "subdivision needs a convex control mesh: upload one or name a built-in control (" + known + "), not '" +
+                  name + "'");
+}
+
+TriMesh uploadedMesh(const MeshInput& in) {
+  return readMeshBytes(in.bytes.data(), in.bytes.size(), in.format, in.name.empty() ? "mesh" : in.name);
+}
+
+// Area of the surface, for the cell size that gives a wanted face count.
+double surfaceArea(const Surface& surface) {
+  if (const auto* m = dynamic_cast<const MeshSurface*>(&surface)) {
+    double area = 0;
+    const TriMesh& T = m->mesh();
+    for (int f = 0; f < T.F.rows(); ++f)
+      area += 0.5 * (T.V.row(T.F(f, 1)) - T.V.row(T.F(f, 0))).cross(T.V.row(T.F(f, 2)) - T.V.row(T.F(f, 0))).norm();
+    return area;
+  }
+  const auto& p = dynamic_cast<const ParametricSurface&>(surface);
+  const auto d = p.domain();
+  constexpr int n = 64;  // midpoint rule on the parameter domain
+  double area = 0;
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < n; ++k) {
+      const auto j = p.jet(d.u0 + (d.u1 - d.u0) * (i + 0.5) / n, d.v0 + (d.v1 - d.v0) * (k + 0.5) / n);
+      area += j.Pu.cross(j.Pv).norm();
+    }
+  return area * (d.u1 - d.u0) * (d.v1 - d.v0) / (n * n);
+}
+
+}  // namespace
+
 void validate(const PipelineParams& p) {
   auto fail = [](const std::string& m) { throw Error(ErrorCode::InvalidParameter, m); };
   if (!std::isfinite(p.cell) || p.cell < 0) fail("cell must be a positive length (got " + number(p.cell) + ")");
@@ -49,11 +117,75 @@ void validate(const PipelineParams& p) {
   if (!(p.mu >= 0 && p.mu <= 1e6)) fail("mu must be in [0, 1e6] (got " + number(p.mu) + ")");
   if (p.maxIterations < 1 || p.maxIterations > 10000)
     fail("maxIterations must be between 1 and 10000 (got " + std::to_string(p.maxIterations) + ")");
+  if (!(p.lowerBound >= 0 && p.lowerBound <= 2)) fail("lowerBound must be in [0, 2] (got " + number(p.lowerBound) + ")");
+  if (p.method != TriangulationMethod::Subdivision) parseFieldSpec(p.field);
+  if (p.mesh && p.mesh->bytes.empty()) fail("the uploaded mesh '" + p.mesh->name + "' is empty (0 bytes)");
+  if (p.mesh && p.method == TriangulationMethod::Lattice)
+    fail("the lattice method needs an analytic surface; use method 'progressive' or 'prespecified' for an uploaded mesh");
+}
+
+SurfacePreview surfacePreview(const PipelineParams& params) {
+  validate(params);
+  SurfacePreview out;
+  std::vector<LocalGeometry> geo;
+  if (params.method == TriangulationMethod::Subdivision) {
+    const TriMesh control = checkConvexControl(params.mesh ? uploadedMesh(*params.mesh) : controlMesh(params.surface));
+    const SubdivisionTriangulation st = subdivisionTriangulation(control, 3);
+    out.mesh = st.surface->mesh();
+    geo = st.surface->vertexGeometries();
+  } else if (params.mesh) {
+    const MeshSurface s(uploadedMesh(*params.mesh), params.mesh->name);
+    out.mesh = s.mesh();
+    geo = s.vertexGeometries();
+  } else {
+    const ParametricSurfacePtr s = makeSurface(params.surface, params.surfaceParams);
+    Triangulation t = latticeTriangulation(*s, cellForFaceCount(*s, 6000));
+    geo = vertexGeometry(t, *s);
+    out.mesh = std::move(t.mesh);
+  }
+  for (const LocalGeometry& g : geo) out.k1.push_back(g.k1), out.k2.push_back(g.k2);
+  return out;
+}
+
+TriangulationStage triangulate(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
+  validate(params);
+  TriangulationStage t;
+  auto checkCell = [&](double area) {
+    const double cell = params.cell > 0 ? params.cell : std::sqrt(area / (params.faces * std::sqrt(3.0) / 2.0));
+    const double expected = area / (cell * cell * std::sqrt(3.0) / 2.0);
+    if (expected > kMaxFaces)
+      throw Error(ErrorCode::InvalidParameter, "cell " + number(cell) + " would give about " + number(std::round(expected)) +
+                                                   " faces, more than the limit of " + std::to_string(kMaxFaces));
+    return cell;
+  };
+  if (params.method == TriangulationMethod::Subdivision) {
+    const TriMesh control = checkConvexControl(params.mesh ? uploadedMesh(*params.mesh) : controlMesh(params.surface));
+    SubdivisionTriangulation st = subdivisionTriangulation(control, subdivisionLevels(control, params.faces, params.cell));
+    t.triangulation = std::move(st.triangulation);
+    t.surface = st.surface;
+  } else {
+    if (params.mesh) {
+      t.surface = std::make_shared<MeshSurface>(uploadedMesh(*params.mesh), params.mesh->name);
+    } else {
+      t.surface = makeSurface(params.surface, params.surfaceParams);
+    }
+    const double cell = checkCell(surfaceArea(*t.surface));
+    if (params.method == TriangulationMethod::Lattice) {
+      t.triangulation = latticeTriangulation(dynamic_cast<const ParametricSurface&>(*t.surface), cell);
+    } else {
+      LayingOptions lo;
+      lo.method = params.method == TriangulationMethod::Progressive ? LayingMethod::Progressive : LayingMethod::Prespecified;
+      lo.field = params.field;
+      lo.cell = cell;
+      lo.lowerBound = params.lowerBound;
+      t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
+    }
+  }
+  t.check = checkTriangulation(t.triangulation, *t.surface);
+  return t;
 }
 
 PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
-  validate(params);
-  const ParametricSurfacePtr surface = makeSurface(params.surface, params.surfaceParams);
   const auto t0 = std::chrono::steady_clock::now();
   PipelineResult r;
   StageClock clock(r.timings);
@@ -63,18 +195,15 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   };
 
   report("triangulate", 0, "laying the triangulation");
-  double cell = params.cell > 0 ? params.cell : cellForFaceCount(*surface, params.faces);
-  if (params.cell > 0) {
-    const double expected = std::pow(cellForFaceCount(*surface, 1) / cell, 2);
-    if (expected > kMaxFaces)
-      throw Error(ErrorCode::InvalidParameter, "cell " + number(cell) + " would give about " + number(std::round(expected)) +
-                                                   " faces, more than the limit of " + std::to_string(kMaxFaces));
-  }
-  r.triangulation = latticeTriangulation(*surface, cell);
+  TriangulationStage stage = triangulate(params, progress, cancel);
+  r.surface = std::move(stage.surface);
+  r.triangulation = std::move(stage.triangulation);
+  r.check = std::move(stage.check);
+  const Surface& surface = *r.surface;
   clock.done("triangulate");
 
   report("dualize", 0, std::string(dualityName(params.duality)) + " duality");
-  r.dual = params.duality == Duality::Dupin ? dupinDual(r.triangulation, *surface) : tangentDual(r.triangulation, *surface);
+  r.dual = params.duality == Duality::Dupin ? dupinDual(r.triangulation, surface) : tangentDual(r.triangulation, surface);
   r.initial = r.dual.mesh;
   clock.done("dualize");
 
@@ -86,12 +215,12 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   po.mu = params.mu;
   po.tolerance = params.tolerance;
   po.maxIterations = params.maxIterations;
-  po.surface = surface.get();
+  po.surface = &surface;
   r.solve = planarize(r.hex, po, progress, cancel);
   clock.done("planarize");
 
   report("measure", 0, "measuring");
-  r.metrics = measure(r.hex, *surface);
+  r.metrics = measure(r.hex, surface);
   clock.done("measure");
   r.totalMilliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (progress) progress({"done", 1, "done"});

@@ -7,9 +7,12 @@
 #include <algorithm>
 #include <sys/resource.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -22,13 +25,24 @@ const char* kHelp = R"(phex — hexagonal meshes with planar faces (P-Hex meshes
 
 Usage:
   phex run [options]        compute a P-Hex mesh of a surface
+  phex triangulate [opts]   only lay and check the triangulation (the options of run; --out writes it)
   phex curvature [options]  principal curvatures and directions per vertex, as CSV
   phex surfaces             list the analytic surfaces and their parameters
   phex --help | --version
 
 Options of `phex run`:
-  --surface NAME            analytic surface (default torus; see `phex surfaces`)
+  --surface NAME            analytic surface (default torus; see `phex surfaces`), or for
+                            --method subdivision a built-in control mesh (icosahedron, egg,
+                            flattened-icosahedron)
+  --mesh FILE               an uploaded triangle mesh (OBJ, OFF, PLY, STL) instead of --surface; for
+                            --method subdivision, the convex control mesh
   --param NAME=VALUE        a surface parameter, e.g. --param R=2 (repeatable)
+  --method NAME             triangulation: progressive (default, §5.2 Method 1), prespecified
+                            (Method 2, along --field), subdivision (§7, closed convex surfaces) or
+                            lattice (parameter rows; analytic surfaces only)
+  --field SPEC              direction field: principal (default), angle:DEG, param, radial,
+                            diverging[:DEG], spiral[:DEG]
+  --lower-bound B           §5.3 lower bound on the step ratio |CM|/|AB|, 0..2 (default 0.3; 0 off)
   --faces N                 wanted number of hexagons, 12..1000000 (default 2000)
   --cell H                  wanted edge length of the triangulation instead of --faces
   --tolerance T             planarity goal relative to edge length (default 1e-9)
@@ -40,7 +54,9 @@ Options of `phex run`:
                             planarity solver: per-face planes by block coordinate descent (default,
                             fastest), per-face planes by Gauss-Newton with Schur elimination (Ceres),
                             or the paper's tetrahedron volumes by Gauss-Newton (Ceres, reference)
-  --out FILE.obj            write the P-Hex mesh as OBJ
+  --out FILE                write the P-Hex mesh (for triangulate: the triangulation, OBJ)
+  --format obj|ply|json     output format (default from the extension, else obj); json carries
+                            the per-face metrics
   --triangulation FILE.obj  write the triangulation as OBJ
   --initial FILE.obj        write the mesh before optimization as OBJ
   --report FILE.json        write counts, planarity, iterations and timings as JSON
@@ -84,6 +100,35 @@ double peakMemoryMB() {
   return usage.ru_maxrss / 1024.0;
 }
 
+json triangulationJson(const phex::Triangulation& t, const phex::TriangulationCheck& c) {
+  json valence = json::object();
+  for (const auto& [k, count] : c.interiorValence) valence[std::to_string(k)] = count;
+  return {{"vertices", t.mesh.V.rows()},
+          {"triangles", t.mesh.F.rows()},
+          {"interiorVertices", c.interiorVertices},
+          {"regularFraction", c.regularFraction},
+          {"interiorValence", valence},
+          {"invalidStars", c.invalidStars},
+          {"parabolicStars", c.parabolicStars.size()},
+          {"edgeLength", {{"min", c.edgeMin}, {"max", c.edgeMax}, {"mean", c.edgeMean}}},
+          {"notes", t.notes}};
+}
+
+// The P-Hex mesh with its per-face metrics, for `--format json`.
+json meshJson(const phex::PipelineResult& r) {
+  json vertices = json::array(), faces = json::array();
+  for (int v = 0; v < r.hex.V.rows(); ++v) vertices.push_back({r.hex.V(v, 0), r.hex.V(v, 1), r.hex.V(v, 2)});
+  for (int f = 0; f < r.hex.faceCount(); ++f) faces.push_back(std::vector<int>(r.hex.face(f), r.hex.face(f) + r.hex.faceSize(f)));
+  const phex::MeshMetrics& m = r.metrics;
+  return {{"vertices", vertices},
+          {"faces", faces},
+          {"faceMetrics",
+           {{"planarity", m.planarity}, {"planarityDiagonals", m.planarityDiagonals}, {"selfIntersecting", m.selfIntersecting},
+            {"convex", m.convex}, {"convexityMismatch", m.convexityMismatch}, {"regularity", m.regularity},
+            {"area", m.faceArea}, {"boundary", r.dual.boundaryFace}}},
+          {"vertexMetrics", {{"surfaceDistance", m.surfaceDistance}}}};
+}
+
 json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
   json bySize = json::object();
   for (const auto& [size, count] : r.metrics.facesBySize) bySize[std::to_string(size)] = count;
@@ -96,12 +141,13 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
   for (const auto& it : r.solve.log)
     log.push_back({{"round", it.round}, {"iteration", it.iteration}, {"lambda", it.lambda},
                    {"objective", it.objective}, {"planarityMax", it.planarityMax}, {"milliseconds", it.milliseconds}});
-  json params = {{"surface", p.surface}, {"surfaceParams", p.surfaceParams}, {"faces", p.faces}, {"cell", p.cell},
+  json params = {{"surface", p.mesh ? p.mesh->name : p.surface}, {"method", phex::triangulationMethodName(p.method)},
+                 {"field", p.field}, {"lowerBound", p.lowerBound}, {"surfaceParams", p.surfaceParams}, {"faces", p.faces}, {"cell", p.cell},
                  {"tolerance", p.tolerance}, {"lambda", p.lambda}, {"mu", p.mu}, {"maxIterations", p.maxIterations},
                  {"duality", phex::dualityName(p.duality)}, {"solver", phex::methodName(p.solver)}};
   return {{"phex", "0.1.0"},
           {"params", params},
-          {"triangulation", {{"vertices", r.triangulation.mesh.V.rows()}, {"triangles", r.triangulation.mesh.F.rows()}}},
+          {"triangulation", triangulationJson(r.triangulation, r.check)},
           {"mesh", {{"vertices", r.metrics.vertexCount}, {"faces", r.metrics.faceCount}, {"facesBySize", bySize}}},
           {"planarity", {{"max", r.metrics.planarityMax}, {"mean", r.metrics.planarityMean},
                          {"initialMax", r.solve.initialPlanarityMax}}},
@@ -122,9 +168,26 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"peakMemoryMB", peakMemoryMB()}};
 }
 
-int run(const std::vector<std::string>& args) {
+// The bytes of an input mesh file; its format is taken from the extension (or sniffed).
+phex::MeshInput readInput(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw phex::Error(phex::ErrorCode::Io, "cannot open '" + path + "' for reading");
+  phex::MeshInput mesh;
+  mesh.bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  mesh.name = path;
+  const auto dot = path.find_last_of('.');
+  if (dot != std::string::npos) {
+    std::string ext = path.substr(dot + 1);
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext == "obj" || ext == "off" || ext == "ply" || ext == "stl") mesh.format = ext;
+  }
+  return mesh;
+}
+
+// `phex run` and `phex triangulate` (which stops after the first stage) share their options.
+int run(const std::vector<std::string>& args, bool triangulateOnly) {
   phex::PipelineParams p;
-  std::string out, tri, initial, reportPath;
+  std::string out, tri, initial, reportPath, format;
   bool quiet = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
@@ -133,6 +196,10 @@ int run(const std::vector<std::string>& args) {
       return args[++i];
     };
     if (a == "--surface") p.surface = value();
+    else if (a == "--mesh") p.mesh = readInput(value());
+    else if (a == "--method") p.method = phex::parseTriangulationMethod(value());
+    else if (a == "--field") p.field = value();
+    else if (a == "--lower-bound") p.lowerBound = parseNumber(a, value());
     else if (a == "--param") {
       const std::string& kv = value();
       const auto eq = kv.find('=');
@@ -150,10 +217,17 @@ int run(const std::vector<std::string>& args) {
     else if (a == "--triangulation") tri = value();
     else if (a == "--initial") initial = value();
     else if (a == "--report") reportPath = value();
+    else if (a == "--format") format = value();
     else if (a == "--quiet") quiet = true;
     else usage("unknown option '" + a + "'");
   }
   if (p.cell != 0 && !(p.cell > 0)) usage("--cell must be positive");
+  if (format.empty()) {
+    const auto dot = out.find_last_of('.');
+    const std::string ext = dot == std::string::npos ? "" : out.substr(dot + 1);
+    format = ext == "ply" || ext == "json" ? ext : "obj";
+  }
+  if (format != "obj" && format != "ply" && format != "json") usage("--format must be obj, ply or json, got '" + format + "'");
   phex::validate(p);
   // Fail on an unwritable output before computing anything.
   for (const std::string* path : {&out, &tri, &initial, &reportPath})
@@ -162,8 +236,21 @@ int run(const std::vector<std::string>& args) {
   phex::ProgressFn progress;
   if (!quiet)
     progress = [](const phex::Progress& pr) { std::cerr << "[" << pr.stage << "] " << pr.message << "\n"; };
+  if (triangulateOnly) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const phex::TriangulationStage t = phex::triangulate(p, progress);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (!out.empty()) phex::writeTextFile(out, phex::toObj(t.triangulation.mesh));
+    json rep = triangulationJson(t.triangulation, t.check);
+    rep["milliseconds"] = ms;
+    if (!reportPath.empty()) phex::writeTextFile(reportPath, rep.dump(2) + "\n");
+    std::cout << "triangles " << t.triangulation.mesh.F.rows() << ", interior valence 6 " << t.check.regularFraction * 100
+              << " %, invalid stars " << t.check.invalidStars.size() << ", " << ms << " ms\n";
+    return t.check.invalidStars.empty() ? 0 : 2;
+  }
   const phex::PipelineResult r = phex::runPipeline(p, progress);
-  if (!out.empty()) phex::writeTextFile(out, phex::toObj(r.hex));
+  if (!out.empty())
+    phex::writeTextFile(out, format == "ply" ? phex::toPly(r.hex) : format == "json" ? meshJson(r).dump() : phex::toObj(r.hex));
   if (!tri.empty()) phex::writeTextFile(tri, phex::toObj(r.triangulation.mesh));
   if (!initial.empty()) phex::writeTextFile(initial, phex::toObj(r.initial));
   const json rep = reportJson(p, r);
@@ -235,7 +322,8 @@ int main(int argc, char** argv) {
     if (args[0] == "--version") return std::cout << "phex 0.1.0\n", 0;
     const std::string cmd = args[0];
     args.erase(args.begin());
-    if (cmd == "run") return run(args);
+    if (cmd == "run") return run(args, false);
+    if (cmd == "triangulate") return run(args, true);
     if (cmd == "surfaces") return surfaces();
     if (cmd == "curvature") return curvature(args);
     usage("unknown command '" + cmd + "'");

@@ -34,6 +34,8 @@ struct PolyMesh {
 // Wavefront OBJ text of a polygon / triangle mesh (1-based indices, 17 significant digits).
 std::string toObj(const PolyMesh& mesh);
 std::string toObj(const TriMesh& mesh);
+// ASCII PLY of a polygon mesh (vertex x y z as double, face vertex_indices as a uint list).
+std::string toPly(const PolyMesh& mesh);
 // Writes `text` to `path`; throws phex::Error(Io) naming the path when it cannot.
 void writeTextFile(const std::string& path, const std::string& text);
 

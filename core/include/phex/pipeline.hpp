@@ -1,5 +1,7 @@
 // phex — one call from parameters to a P-Hex mesh: surface → triangulate → dualize → planarize → measure.
 #pragma once
+#include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,9 +16,35 @@ namespace phex {
 
 constexpr int kMaxFaces = 1000000;  // the largest face count phex accepts
 
+// How the triangulation is laid (§5, §7).
+enum class TriangulationMethod {
+  Lattice,       // rows of the parameter domain, every other one shifted (analytic surfaces only)
+  Progressive,   // Method 1, progressive conjugation (§5.2)
+  Prespecified,  // Method 2, pre-specified conjugation along a direction field (§5.2)
+  Subdivision    // Loop subdivision of a convex control mesh (§7): closed convex surfaces, 12 pentagons
+};
+// "lattice" | "progressive" | "prespecified" | "subdivision"; parseTriangulationMethod throws
+// Error(InvalidParameter) for other names.
+TriangulationMethod parseTriangulationMethod(const std::string& name);
+const char* triangulationMethodName(TriangulationMethod m);
+
+// The built-in control meshes of the subdivision method (the `surface` names it accepts).
+const std::vector<std::string>& subdivisionControls();
+
+// An uploaded triangle mesh: the file's bytes and format ("obj", "off", "ply", "stl" or "" to sniff).
+struct MeshInput {
+  std::vector<std::uint8_t> bytes;
+  std::string format;
+  std::string name;  // for messages, e.g. the file name
+};
+
 struct PipelineParams {
-  std::string surface = "torus";   // an analytic surface name (see analyticSurfaces())
+  std::string surface = "torus";   // an analytic surface (analyticSurfaces()), or a subdivisionControls() name
   SurfaceParams surfaceParams;     // its parameters; missing ones take their defaults
+  std::optional<MeshInput> mesh;   // an uploaded mesh instead of `surface` (for subdivision: the control mesh)
+  TriangulationMethod method = TriangulationMethod::Progressive;
+  std::string field = "principal"; // direction field of the conjugate methods (see parseFieldSpec)
+  double lowerBound = 0.3;         // §5.3 step-ratio lower bound b, in [0, 2]; 0 disables it
   int faces = 2000;                // wanted number of hexagons, 12 .. kMaxFaces (ignored when cell > 0)
   double cell = 0.0;               // wanted edge length of the triangulation, in model units (0: use faces)
   double tolerance = 1e-9;         // planarity goal, relative to edge length, in (0, 0.1]
@@ -37,7 +65,9 @@ struct StageTiming {
 };
 
 struct PipelineResult {
+  SurfacePtr surface;          // the surface tiled (analytic, uploaded mesh, or subdivision limit surface)
   Triangulation triangulation;
+  TriangulationCheck check;    // Propositions 4/5 on every star, valences, edge lengths
   PolyMesh initial;            // the dual mesh before optimization (H0)
   PolyMesh hex;                // the P-Hex mesh
   DualMesh dual;               // bookkeeping of the dual (which vertex / triangle each element comes from)
@@ -47,8 +77,26 @@ struct PipelineResult {
   double totalMilliseconds = 0.0;
 };
 
+// The surface of `params` as a triangle mesh with the principal curvatures at its vertices, for display:
+// an analytic surface sampled on its parameter lattice (exact curvature), an uploaded mesh as it is
+// (estimated curvature), a subdivision control's limit surface.
+struct SurfacePreview {
+  TriMesh mesh;
+  std::vector<double> k1, k2;  // #V
+};
+SurfacePreview surfacePreview(const PipelineParams& params);
+
 // Throws Error(InvalidParameter) naming the first parameter that is wrong.
 void validate(const PipelineParams& params);
+
+// The first stage alone: the surface of `params` and its triangulation, checked.
+struct TriangulationStage {
+  SurfacePtr surface;
+  Triangulation triangulation;
+  TriangulationCheck check;
+};
+TriangulationStage triangulate(const PipelineParams& params, const ProgressFn& progress = {},
+                               const CancelFlag* cancel = nullptr);
 
 PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress = {},
                            const CancelFlag* cancel = nullptr);
