@@ -87,24 +87,72 @@ Vec2 ParametricSurface::project(const Vec3& p, Vec2 uv) const {
 void ParametricSurface::ensureSeeds() const {
   if (!seedPoints_.empty()) return;
   const Domain d = domain();
-  constexpr int n = 48;
+  constexpr int n = 64;
   for (int i = 0; i <= n; ++i)
     for (int k = 0; k <= n; ++k) {
       const Vec2 uv(d.u0 + (d.u1 - d.u0) * i / n, d.v0 + (d.v1 - d.v0) * k / n);
       seedParams_.push_back(uv);
       seedPoints_.push_back(position(uv.x(), uv.y()));
     }
+  // A uniform grid over the seeds (counting sort by cell) so a query looks at nearby cells only.
+  Box3 box;
+  for (const Vec3& q : seedPoints_) box.extend(q);
+  const Vec3 size = box.sizes().cwiseMax(1e-12 * (1.0 + box.sizes().maxCoeff()));
+  grid_.cell = size.maxCoeff() / 24.0;
+  grid_.origin = box.min();
+  for (int a = 0; a < 3; ++a) grid_.dims[a] = std::max(1, static_cast<int>(std::ceil(size[a] / grid_.cell)) + 1);
+  std::vector<int> cellOf(seedPoints_.size());
+  grid_.start.assign(static_cast<std::size_t>(grid_.dims[0]) * grid_.dims[1] * grid_.dims[2] + 1, 0);
+  for (std::size_t i = 0; i < seedPoints_.size(); ++i) {
+    cellOf[i] = grid_.index(grid_.cellOf(seedPoints_[i]));
+    ++grid_.start[cellOf[i] + 1];
+  }
+  for (std::size_t c = 1; c < grid_.start.size(); ++c) grid_.start[c] += grid_.start[c - 1];
+  grid_.ids.resize(seedPoints_.size());
+  std::vector<int> fill(grid_.start.begin(), grid_.start.end() - 1);
+  for (std::size_t i = 0; i < seedPoints_.size(); ++i) grid_.ids[fill[cellOf[i]]++] = static_cast<int>(i);
+}
+
+Eigen::Vector3i ParametricSurface::SeedGrid::cellOf(const Vec3& p) const {
+  Eigen::Vector3i c;
+  for (int a = 0; a < 3; ++a) c[a] = std::clamp(static_cast<int>(std::floor((p[a] - origin[a]) / cell)), 0, dims[a] - 1);
+  return c;
+}
+
+int ParametricSurface::SeedGrid::index(const Eigen::Vector3i& c) const { return (c.z() * dims[1] + c.y()) * dims[0] + c.x(); }
+
+std::size_t ParametricSurface::nearestSeed(const Vec3& p) const {
+  // Rings of cells around p's (clamped) cell, until no unvisited cell can hold a nearer seed.
+  const Eigen::Vector3i c0 = grid_.cellOf(p);
+  const Vec3 clamped = p.cwiseMax(grid_.origin).cwiseMin(grid_.origin + grid_.cell * grid_.dims.cast<double>());
+  const double outside = (p - clamped).norm();  // p's distance from the grid's box
+  std::size_t best = 0;
+  double bestD = std::numeric_limits<double>::infinity();
+  const int maxRing = grid_.dims.maxCoeff();
+  for (int r = 0; r <= maxRing; ++r) {
+    for (int z = c0.z() - r; z <= c0.z() + r; ++z)
+      for (int y = c0.y() - r; y <= c0.y() + r; ++y)
+        for (int x = c0.x() - r; x <= c0.x() + r; ++x) {
+          if (std::max({std::abs(x - c0.x()), std::abs(y - c0.y()), std::abs(z - c0.z())}) != r) continue;
+          if (x < 0 || y < 0 || z < 0 || x >= grid_.dims[0] || y >= grid_.dims[1] || z >= grid_.dims[2]) continue;
+          const int cell = grid_.index(Eigen::Vector3i(x, y, z));
+          for (int k = grid_.start[cell]; k < grid_.start[cell + 1]; ++k) {
+            const double dd = (seedPoints_[grid_.ids[k]] - p).squaredNorm();
+            if (dd < bestD) bestD = dd, best = static_cast<std::size_t>(grid_.ids[k]);
+          }
+        }
+    const double reach = outside + r * grid_.cell;  // every seed beyond ring r is at least this far
+    if (bestD <= reach * reach) break;
+  }
+  return best;
 }
 
 LocalGeometry ParametricSurface::closestPoint(const Vec3& p) const {
   ensureSeeds();
-  std::size_t best = 0;
-  double bestD = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < seedPoints_.size(); ++i) {
-    const double dd = (seedPoints_[i] - p).squaredNorm();
-    if (dd < bestD) bestD = dd, best = i;
-  }
-  const Vec2 uv = project(p, seedParams_[best]);
+  const std::size_t seed = nearestSeed(p);
+  Vec2 uv = project(p, seedParams_[seed]);
+  // Newton may settle on a farther local minimum than its seed on strongly curved patches.
+  if ((position(uv.x(), uv.y()) - p).squaredNorm() > (seedPoints_[seed] - p).squaredNorm()) uv = seedParams_[seed];
   return geometryAt(uv.x(), uv.y());
 }
 

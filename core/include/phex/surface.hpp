@@ -53,9 +53,20 @@ class ParametricSurface : public Surface {
   Vec2 normalize(Vec2 uv) const;
 
  private:
+  // Samples of the domain that start closestPoint's Newton iteration, bucketed in a uniform grid.
+  struct SeedGrid {
+    Vec3 origin = Vec3::Zero();
+    double cell = 1;
+    Eigen::Vector3i dims = Eigen::Vector3i::Ones();
+    std::vector<int> start, ids;  // seeds of cell c: ids[start[c] .. start[c+1])
+    Eigen::Vector3i cellOf(const Vec3& p) const;
+    int index(const Eigen::Vector3i& c) const;
+  };
   void ensureSeeds() const;
+  std::size_t nearestSeed(const Vec3& p) const;
   mutable std::vector<Vec3> seedPoints_;
   mutable std::vector<Vec2> seedParams_;
+  mutable SeedGrid grid_;
 };
 
 using SurfacePtr = std::shared_ptr<const Surface>;
