@@ -1,184 +1,33 @@
-// phex web app: computes a P-Hex mesh with the phex library and shows it with three.js.
-import * as THREE from 'three';
-import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
-import { createPHex, meshToOBJ, triangulateFaces } from 'phex';
+// phex web app: designs P-Hex meshes with the phex library (in a worker) and shows them with three.js.
+import { createPHex, MESH_FORMATS, meshToOBJ, meshToPLY, PARAMETERS } from 'phex';
+import { CURVATURE_MODES, curvatureColoring, FACE_MODES, faceColoring, faceQuantities, fmt } from './coloring.js';
+import { PRESETS, presetParams } from './presets.js';
+import { Viewer } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
-const BACKGROUND = 0xeef1f5;
-const EDGE_COLOR = 0x1d232b;
-const INVALID_COLOR = new THREE.Color(0xd4148c); // self-intersecting faces, off the planarity scale
-const RERUN_DELAY_MS = 350;
+const RERUN_DELAY_MS = 300;
+const DEFAULT_SURFACE = 'torus';
+// Run parameters with a form field of the same id; those with `requires` show only when the core supports them.
+const FORM_PARAMS = PARAMETERS.filter((p) => $(p.name));
+const VIEW_KEYS = ['view', 'color'];
 
-// Planarity colour scale (log10), from "far below the goal" to "above the goal", as colour stops.
-const SCALE_STOPS = ['#30123b', '#3e6ff2', '#1ccfd5', '#62fc6b', '#d4e735', '#fb8022', '#b21a02'].map((c) => new THREE.Color(c));
-const DECADES_BELOW_GOAL = 6;
-const DECADES_ABOVE_GOAL = 1;
+const viewer = new Viewer($('viewport'));
+const ms = (x) => Math.round(x).toString();
+
+let phex;
+let surfaces = [];
+let capabilities;
+let upload = null; // {bytes, name, format} of an uploaded mesh in place of the analytic surface
+let last = null; // {result, params, quantities: {hex, initial}}
+let preview = null; // {key, data} of the curvature preview
+let running = null; // AbortController of the run in flight
+let rerunTimer = 0;
+let runs = 0;
+
+// ---------------------------------------------------------------- status, errors
 
 function setState(state) {
   document.body.dataset.state = state;
-}
-
-// ---------------------------------------------------------------- scene
-
-const viewport = $('viewport');
-const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
-renderer.setPixelRatio(window.devicePixelRatio);
-renderer.setClearColor(BACKGROUND);
-viewport.append(renderer.domElement);
-
-const scene = new THREE.Scene();
-const camera = new THREE.PerspectiveCamera(40, 1, 0.001, 1000);
-camera.up.set(0, 0, 1); // the surfaces are modelled with z up
-scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8f99, 1.6));
-const sun = new THREE.DirectionalLight(0xffffff, 1.4);
-camera.add(sun); // a light that follows the camera keeps every side readable
-sun.position.set(1, 2, 3);
-scene.add(camera);
-
-const controls = new OrbitControls(camera, renderer.domElement);
-controls.addEventListener('change', render);
-
-const meshGroup = new THREE.Group();
-scene.add(meshGroup);
-
-function render() {
-  renderer.render(scene, camera);
-}
-
-function resize() {
-  const { clientWidth: w, clientHeight: h } = viewport;
-  if (w === 0 || h === 0) return;
-  renderer.setSize(w, h);
-  camera.aspect = w / h;
-  camera.updateProjectionMatrix();
-  render();
-}
-new ResizeObserver(resize).observe(viewport);
-
-/** Frames the bounding sphere of the vertices (tighter than that of the bounding box, e.g. for a flat torus). */
-function fitToView(geometry) {
-  geometry.computeBoundingSphere();
-  const sphere = geometry.boundingSphere;
-  const fov = THREE.MathUtils.degToRad(camera.fov);
-  const distance = (sphere.radius / Math.sin(Math.min(fov, fov * camera.aspect) / 2)) * 1.05;
-  const direction = new THREE.Vector3(1, -1.3, 0.9).normalize();
-  camera.position.copy(sphere.center).addScaledVector(direction, distance);
-  camera.near = distance / 100;
-  camera.far = distance * 10;
-  camera.updateProjectionMatrix();
-  controls.target.copy(sphere.center);
-  controls.update();
-}
-
-function scaleColor(t, target) {
-  const x = THREE.MathUtils.clamp(t, 0, 1) * (SCALE_STOPS.length - 1);
-  const i = Math.min(Math.floor(x), SCALE_STOPS.length - 2);
-  return target.lerpColors(SCALE_STOPS[i], SCALE_STOPS[i + 1], x - i);
-}
-
-/** Maps a planarity value onto [0, 1] of the colour scale around the planarity goal. */
-function scalePosition(planarity, tolerance) {
-  const low = Math.log10(tolerance) - DECADES_BELOW_GOAL;
-  const high = Math.log10(tolerance) + DECADES_ABOVE_GOAL;
-  return (Math.log10(Math.max(planarity, 1e-300)) - low) / (high - low);
-}
-
-/** Faces as flat-coloured triangles: vertices are duplicated per triangle so each face keeps its own colour. */
-function facesObject(mesh, metrics, tolerance) {
-  const { positions, index, faceOfTriangle } = triangulateFaces(mesh);
-  const triangleCount = faceOfTriangle.length;
-  const position = new Float32Array(triangleCount * 9);
-  const color = new Float32Array(triangleCount * 9);
-  const c = new THREE.Color();
-  for (let t = 0; t < triangleCount; t++) {
-    const f = faceOfTriangle[t];
-    if (metrics.selfIntersecting[f]) c.copy(INVALID_COLOR);
-    else scaleColor(scalePosition(metrics.planarity[f], tolerance), c);
-    for (let k = 0; k < 3; k++) {
-      const v = index[3 * t + k];
-      position.set(positions.subarray(3 * v, 3 * v + 3), 9 * t + 3 * k);
-      color.set([c.r, c.g, c.b], 9 * t + 3 * k);
-    }
-  }
-  const geometry = new THREE.BufferGeometry();
-  geometry.setAttribute('position', new THREE.BufferAttribute(position, 3));
-  geometry.setAttribute('color', new THREE.BufferAttribute(color, 3));
-  geometry.computeVertexNormals();
-  const material = new THREE.MeshLambertMaterial({
-    vertexColors: true,
-    side: THREE.DoubleSide,
-    // Push faces back a little so the polygon edges drawn on them are never hidden.
-    polygonOffset: true,
-    polygonOffsetFactor: 1,
-    polygonOffsetUnits: 1,
-  });
-  return new THREE.Mesh(geometry, material);
-}
-
-/** The polygon boundaries (not the fan triangles), each edge once. */
-function edgesObject(mesh) {
-  const { positions, faceOffsets, faceIndices } = mesh;
-  const seen = new Set();
-  const segments = [];
-  for (let f = 0; f + 1 < faceOffsets.length; f++) {
-    const first = faceOffsets[f];
-    const n = faceOffsets[f + 1] - first;
-    for (let i = 0; i < n; i++) {
-      const a = faceIndices[first + i];
-      const b = faceIndices[first + ((i + 1) % n)];
-      const key = a < b ? `${a},${b}` : `${b},${a}`;
-      if (seen.has(key)) continue;
-      seen.add(key);
-      segments.push(a, b);
-    }
-  }
-  const position = new Float32Array(segments.length * 3);
-  segments.forEach((v, i) => position.set(positions.subarray(3 * v, 3 * v + 3), 3 * i));
-  const geometry = new THREE.BufferGeometry();
-  geometry.setAttribute('position', new THREE.BufferAttribute(position, 3));
-  return new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ color: EDGE_COLOR }));
-}
-
-function showMesh(result, tolerance) {
-  for (const child of [...meshGroup.children]) {
-    child.geometry.dispose();
-    child.material.dispose();
-    meshGroup.remove(child);
-  }
-  const faces = facesObject(result.hex, result.metrics, tolerance);
-  meshGroup.add(faces, edgesObject(result.hex));
-  fitToView(faces.geometry);
-  render();
-}
-
-// ---------------------------------------------------------------- panels
-
-const fmt = (x) => (x === 0 ? '0' : x.toExponential(2));
-const ms = (x) => Math.round(x).toString();
-
-function showStats(result) {
-  const { metrics, solve, timings } = result;
-  $('face-count').textContent = String(metrics.faceCount);
-  $('faces-by-size').textContent = Object.entries(metrics.facesBySize)
-    .map(([size, count]) => `${size}-gons ${count}`)
-    .join(', ');
-  $('planarity-max').textContent = fmt(metrics.planarityMax);
-  $('planarity-mean').textContent = fmt(metrics.planarityMean);
-  $('invalid-faces').textContent = String(metrics.selfIntersectingCount);
-  $('iterations').textContent = `${solve.iterations}${solve.converged ? '' : ' (not converged)'}`;
-  $('timings').textContent = ['triangulate', 'dualize', 'planarize', 'measure']
-    .map((stage) => `${stage} ${ms(timings[stage] ?? 0)}`)
-    .concat(`total ${ms(timings.total)}`)
-    .join(' · ');
-}
-
-function showLegend(tolerance) {
-  const stops = SCALE_STOPS.map((c, i) => `#${c.getHexString()} ${((100 * i) / (SCALE_STOPS.length - 1)).toFixed(1)}%`);
-  $('legend-bar').style.background = `linear-gradient(to right, ${stops.join(', ')})`;
-  $('legend-low').textContent = `≤ ${fmt(tolerance * 10 ** -DECADES_BELOW_GOAL)}`;
-  $('legend-high').textContent = `≥ ${fmt(tolerance * 10 ** DECADES_ABOVE_GOAL)}`;
-  $('legend-goal-value').textContent = fmt(tolerance);
-  $('legend-goal').style.left = `${100 * scalePosition(tolerance, tolerance)}%`;
 }
 
 function showError(message) {
@@ -196,136 +45,507 @@ function showProgress({ stage, fraction, message }) {
   $('stage').textContent = `${stage}: ${message}`;
 }
 
-// ---------------------------------------------------------------- parameters and runs
-
-let phex;
-let surfaces = [];
-let lastResult = null;
-let lastParams = null;
-let running = null; // AbortController of the run in flight
-let rerunTimer = 0;
+// ---------------------------------------------------------------- form
 
 /** Reads a number input; an empty or unparsable field is passed on as NaN, for the library to name it. */
 function numberOf(input) {
   return input.value.trim() === '' ? Number.NaN : Number(input.value);
 }
 
-function buildSurfaceParams(spec) {
+function supported(spec) {
+  if (!spec.requires) return true;
+  const c = capabilities[spec.requires];
+  return Array.isArray(c) ? c.length > 0 : Boolean(c);
+}
+
+/** Tooltip text and HTML range of a parameter, from its description and range. */
+function describeInput(input, { description, min, max, default: value, values }) {
+  const range = values ? `one of ${values.join(', ')}` : `${min} … ${max === Infinity ? '∞' : max}`;
+  input.title = `${description}\nRange: ${range}. Default: ${value}.`;
+  input.closest('label').title = input.title;
+  if (Number.isFinite(min)) input.min = String(min);
+  if (Number.isFinite(max)) input.max = String(max);
+}
+
+function buildForm() {
+  $('surface').replaceChildren(...surfaces.map((s) => new Option(s.name, s.name)));
+  for (const spec of PARAMETERS) {
+    const input = $(spec.name);
+    if (!input) continue;
+    describeInput(input, spec);
+    input.closest('label').hidden = !supported(spec);
+  }
+  $('method').replaceChildren(...capabilities.methods.map((m) => new Option(m, m, m === 'lattice', m === 'lattice')));
+  $('field-values').replaceChildren(...capabilities.fields.map((f) => new Option(f.replace('angle:DEG', 'angle:30'))));
+  $('color').replaceChildren(...Object.entries(FACE_MODES).map(([value, label]) => new Option(label, value)));
+  const curvature = $('view').querySelector('[value=curvature]');
+  curvature.disabled = !capabilities.surfacePreview;
+  if (curvature.disabled) curvature.textContent += ' (needs a newer phex core)';
+
+  const figures = $('figure-presets');
+  for (const [label, preset] of Object.entries(PRESETS)) {
+    const button = document.createElement('button');
+    button.type = 'button';
+    button.textContent = label;
+    button.dataset.preset = label;
+    const { missing } = presetParams(preset, capabilities);
+    button.title = missing.length ? `Not yet in this core build: ${missing.join(', ')}` : 'Compute this design';
+    button.addEventListener('click', () => applyPreset(label));
+    figures.append(button);
+  }
+}
+
+function buildSurfaceParams(name, values = {}) {
+  const spec = surfaces.find((s) => s.name === name);
   const fieldset = $('surface-params');
   fieldset.replaceChildren();
   for (const p of spec.parameters) {
     const label = document.createElement('label');
     label.textContent = p.name;
     const input = document.createElement('input');
-    Object.assign(input, { type: 'number', step: 'any', value: String(p.default), min: String(p.min), max: String(p.max) });
+    Object.assign(input, { type: 'number', step: 'any', value: String(values[p.name] ?? p.default) });
     input.id = `param-${p.name}`;
     input.dataset.param = p.name;
-    const hint = document.createElement('small');
-    hint.textContent = p.description;
-    label.append(input, hint);
+    label.append(input);
+    describeInput(input, p);
     fieldset.append(label);
   }
   $('surface-description').textContent = spec.description;
 }
 
+/** The run parameters the form describes (the uploaded mesh, if any, in place of the surface). */
 function readParams() {
-  const surfaceParams = {};
-  for (const input of $('surface-params').querySelectorAll('input')) surfaceParams[input.dataset.param] = numberOf(input);
-  return {
-    surface: $('surface').value,
-    surfaceParams,
-    faces: numberOf($('faces')),
-    tolerance: numberOf($('tolerance')),
-    duality: $('duality').value,
-  };
+  const params = {};
+  if (upload) Object.assign(params, { mesh: upload.bytes, meshFormat: upload.format, meshName: upload.name });
+  else {
+    params.surface = $('surface').value;
+    params.surfaceParams = {};
+    for (const input of $('surface-params').querySelectorAll('input')) params.surfaceParams[input.dataset.param] = numberOf(input);
+  }
+  for (const spec of FORM_PARAMS) {
+    if (!supported(spec)) continue;
+    const input = $(spec.name);
+    params[spec.name] = spec.type === 'integer' || spec.type === 'number' ? numberOf(input) : input.value.trim();
+  }
+  return params;
 }
 
+/** Sets the form from a design (a preset's or a link's params); missing entries take their defaults. */
+function writeForm(params) {
+  const name = surfaces.some((s) => s.name === params.surface) ? params.surface : DEFAULT_SURFACE;
+  $('surface').value = name;
+  buildSurfaceParams(name, params.surfaceParams);
+  for (const spec of FORM_PARAMS) $(spec.name).value = String(params[spec.name] ?? spec.default);
+}
+
+// ---------------------------------------------------------------- the design in the URL
+
+/** The design as a URL hash: only what differs from the defaults. */
+function designToHash(params) {
+  const q = new URLSearchParams();
+  if (params.surface) q.set('surface', params.surface);
+  const spec = surfaces.find((s) => s.name === params.surface);
+  for (const [k, v] of Object.entries(params.surfaceParams ?? {})) {
+    if (spec?.parameters.find((p) => p.name === k)?.default !== v) q.set(`s.${k}`, String(v));
+  }
+  for (const p of FORM_PARAMS) if (params[p.name] !== undefined && params[p.name] !== p.default) q.set(p.name, String(params[p.name]));
+  if ($('view').value !== 'hex') q.set('view', $('view').value);
+  if ($('color').value !== 'planarity') q.set('color', $('color').value);
+  return `#${q}`;
+}
+
+/** The design of a link (hash, or query as a fallback), or null when it has none. */
+function designFromUrl() {
+  const text = location.hash.length > 1 ? location.hash.slice(1) : location.search.slice(1);
+  if (!text) return null;
+  const q = new URLSearchParams(text);
+  const params = { surfaceParams: {} };
+  const view = {};
+  for (const [key, value] of q) {
+    const spec = PARAMETERS.find((p) => p.name === key);
+    if (key === 'surface') params.surface = value;
+    else if (key.startsWith('s.')) params.surfaceParams[key.slice(2)] = Number(value);
+    else if (spec) params[key] = spec.type === 'integer' || spec.type === 'number' ? Number(value) : value;
+    else if (VIEW_KEYS.includes(key)) view[key] = value;
+  }
+  return { params, view };
+}
+
+// ---------------------------------------------------------------- showing results
+
+function colorOptions() {
+  const view = $('view').value;
+  const modes = view === 'curvature' ? CURVATURE_MODES : view === 'triangulation' ? { none: 'Plain' } : FACE_MODES;
+  const current = $('color').value;
+  if (Object.keys(modes).join() !== [...$('color').options].map((o) => o.value).join()) {
+    $('color').replaceChildren(...Object.entries(modes).map(([value, label]) => new Option(label, value)));
+    if (current in modes) $('color').value = current;
+  }
+}
+
+function showLegend(legend) {
+  $('legend').hidden = !legend;
+  if (!legend) return;
+  $('legend-title').textContent = legend.title;
+  $('legend-bar').style.background = legend.background;
+  $('legend-low').textContent = legend.low;
+  $('legend-high').textContent = legend.high;
+  $('legend-goal').hidden = legend.mark === undefined;
+  if (legend.mark !== undefined) $('legend-goal').style.left = `${100 * Math.min(Math.max(legend.mark, 0), 1)}%`;
+}
+
+function shading() {
+  return { flat: $('flat').checked, wireframe: $('wireframe').checked };
+}
+
+/** Draws the current view of the last result; `refit` frames it. */
+async function draw({ refit = false } = {}) {
+  if (!last) return;
+  colorOptions();
+  const view = $('view').value;
+  const mode = $('color').value;
+  viewer.clear();
+  if (view === 'hex' || view === 'initial') {
+    const { faceColor, legend } = faceColoring(mode, last.quantities[view], last.params.tolerance ?? 1e-9);
+    viewer.showPolygons(last.result[view], faceColor, shading());
+    showLegend(legend);
+  } else if (view === 'triangulation') {
+    viewer.showTriangles(last.result.triangulation, null, shading());
+    showLegend(null);
+  } else if (view === 'curvature') {
+    const data = await curvaturePreview();
+    if (!data || $('view').value !== 'curvature') return;
+    const { vertexColor, legend } = curvatureColoring(mode, data);
+    viewer.clear();
+    viewer.showTriangles(data, vertexColor, shading());
+    showLegend(legend);
+  }
+  if (refit) viewer.fitToView();
+  viewer.render();
+}
+
+async function curvaturePreview() {
+  const key = JSON.stringify(last.params, (k, v) => (v instanceof Uint8Array ? `${v.length} bytes` : v));
+  if (preview?.key !== key) {
+    try {
+      preview = { key, data: await phex.surfacePreview(last.params) };
+    } catch (error) {
+      showError(`Curvature view: ${error.message}`);
+      return null;
+    }
+  }
+  return preview.data;
+}
+
+function showStats({ metrics, solve, timings }) {
+  $('face-count').textContent = String(metrics.faceCount);
+  $('faces-by-size').textContent = Object.entries(metrics.facesBySize)
+    .map(([size, count]) => `${size}-gons ${count}`)
+    .join(', ');
+  $('planarity-max').textContent = fmt(metrics.planarityMax);
+  $('planarity-mean').textContent = fmt(metrics.planarityMean);
+  $('invalid-faces').textContent = String(metrics.selfIntersectingCount);
+  $('convexity-mismatch').textContent = metrics.convexityMismatchCount === undefined ? '–' : String(metrics.convexityMismatchCount);
+  $('regularity-mean').textContent = metrics.regularityMean === undefined ? '–' : metrics.regularityMean.toFixed(3);
+  $('surface-distance').textContent = Number.isFinite(metrics.surfaceDistanceMax) ? `${fmt(metrics.surfaceDistanceMax)} max` : '–';
+  $('iterations').textContent = `${solve.iterations}${solve.converged ? '' : ' (not converged)'}`;
+  $('timings').textContent = Object.entries(timings)
+    .filter(([stage]) => stage !== 'total')
+    .map(([stage, t]) => `${stage} ${ms(t)}`)
+    .concat(`total ${ms(timings.total)}`)
+    .join(' · ');
+}
+
+// ---------------------------------------------------------------- runs
+
+/** Computes the design of the form. Resolves with 'ok', 'error', 'cancelled' or 'superseded'. */
 async function compute() {
   clearTimeout(rerunTimer);
   running?.abort();
   const controller = new AbortController();
   running = controller;
-  const params = readParams();
   setState('running');
   $('cancel').disabled = false;
   showProgress({ stage: 'start', fraction: 0, message: 'starting' });
+  let params;
   try {
+    params = readParams();
     const result = await phex.run(params, { onProgress: showProgress, signal: controller.signal });
-    if (running !== controller) return;
-    lastResult = result;
-    lastParams = params;
+    if (running !== controller) return 'superseded';
+    const first = !last;
+    last = { result, params, quantities: { hex: faceQuantities(result.hex, result.metrics), initial: faceQuantities(result.initial, null) } };
     clearError();
-    showMesh(result, params.tolerance);
+    await draw({ refit: first || params.surface !== lastSurfaceKey || Boolean(params.mesh) });
+    lastSurfaceKey = params.surface;
     showStats(result);
-    showLegend(params.tolerance);
-    $('export-obj').disabled = false;
+    for (const button of document.querySelectorAll('.exports button')) button.disabled = false;
     $('stage').textContent = `done in ${ms(result.timings.total)} ms`;
+    if (!upload) history.replaceState(null, '', designToHash(params));
+    markShown(first);
     setState('ready');
+    return 'ok';
   } catch (error) {
-    if (running !== controller) return; // superseded by a newer run
+    if (running !== controller) return 'superseded';
     if (error.code === 'cancelled') {
       $('stage').textContent = 'cancelled';
-      setState(lastResult ? 'ready' : 'error');
-    } else {
-      showError(error.message);
-      $('stage').textContent = '';
-      setState('error');
+      setState(last ? 'ready' : 'error');
+      return 'cancelled';
     }
+    showError(error.message);
+    $('stage').textContent = '';
+    setState('error');
+    return 'error';
   } finally {
     if (running === controller) {
       running = null;
       $('cancel').disabled = true;
       $('progress').value = 0;
+      document.body.dataset.runs = String(++runs);
     }
   }
 }
+let lastSurfaceKey = null;
+
+/** Performance marks: first mesh on screen after load, and edit → new mesh on screen. */
+function markShown(first) {
+  requestAnimationFrame(() => {
+    performance.mark('phex:shown');
+    if (first) performance.measure('phex:first-render', { start: 0, end: 'phex:shown' });
+    else if (performance.getEntriesByName('phex:edit', 'mark').length) {
+      performance.measure('phex:edit-to-screen', 'phex:edit', 'phex:shown');
+      performance.clearMarks('phex:edit');
+    }
+  });
+}
 
 function scheduleRun() {
+  performance.mark('phex:edit');
   clearTimeout(rerunTimer);
   rerunTimer = setTimeout(compute, RERUN_DELAY_MS);
 }
 
-function exportObj() {
-  if (!lastResult) return;
-  const blob = new Blob([meshToOBJ(lastResult.hex)], { type: 'text/plain' });
-  const link = document.createElement('a');
-  link.href = URL.createObjectURL(blob);
-  link.download = `phex-${lastParams.surface}-${lastResult.metrics.faceCount}.obj`;
-  link.click();
-  URL.revokeObjectURL(link.href);
+function applyPreset(label) {
+  const { params, missing } = presetParams(PRESETS[label], capabilities);
+  const note = $('preset-note');
+  note.hidden = missing.length === 0;
+  note.textContent = missing.length ? `${label}: computed without ${missing.join(', ')} (not yet in this core build).` : '';
+  setUpload(null);
+  writeForm(params);
+  if (PRESETS[label].view?.color) $('color').value = PRESETS[label].view.color;
+  lastSurfaceKey = null; // frame the new design
+  compute();
 }
+
+// ---------------------------------------------------------------- uploads
+
+function setUpload(value) {
+  upload = value;
+  $('mesh-source').hidden = !upload;
+  $('mesh-name').textContent = upload ? `Mesh: ${upload.name} (${(upload.bytes.length / 1024).toFixed(0)} kB)` : '';
+  $('surface').disabled = Boolean(upload);
+  $('surface-params').disabled = Boolean(upload);
+}
+
+async function openFile(file) {
+  const format = file.name.includes('.') ? file.name.split('.').pop().toLowerCase() : '';
+  if (!MESH_FORMATS.includes(format)) {
+    showError(`${file.name}: not a mesh file phex reads (use OBJ, OFF, PLY or STL).`);
+    return;
+  }
+  if (!capabilities.meshInput) {
+    showError(`Cannot open ${file.name}: this phex core build does not read meshes yet; choose an analytic surface.`);
+    return;
+  }
+  const previous = upload;
+  setUpload({ bytes: new Uint8Array(await file.arrayBuffer()), name: file.name, format });
+  lastSurfaceKey = null;
+  const outcome = await compute();
+  // A file the core refuses is dropped again, so the next edit computes what was shown before.
+  if (outcome === 'error') setUpload(previous);
+}
+
+function setUpDrop() {
+  let depth = 0;
+  const overlay = $('drop-overlay');
+  addEventListener('dragenter', (event) => {
+    if (!event.dataTransfer?.types.includes('Files')) return;
+    depth++;
+    overlay.hidden = false;
+  });
+  addEventListener('dragleave', () => {
+    depth = Math.max(0, depth - 1);
+    if (depth === 0) overlay.hidden = true;
+  });
+  addEventListener('dragover', (event) => event.preventDefault());
+  addEventListener('drop', (event) => {
+    event.preventDefault();
+    depth = 0;
+    overlay.hidden = true;
+    const [file] = event.dataTransfer?.files ?? [];
+    if (file) openFile(file);
+  });
+}
+
+// ---------------------------------------------------------------- hover
+
+function setUpHover() {
+  const tooltip = $('tooltip');
+  let frame = 0;
+  viewer.canvas.addEventListener('pointermove', (event) => {
+    if (frame || event.buttons) return;
+    frame = requestAnimationFrame(() => {
+      frame = 0;
+      const view = $('view').value;
+      const face = last && (view === 'hex' || view === 'initial') ? viewer.pick(event.clientX, event.clientY) : -1;
+      tooltip.hidden = face < 0;
+      if (face < 0) return;
+      const q = last.quantities[view];
+      const mesh = last.result[view];
+      const rows = [
+        ['Face', `${face} (${mesh.faceOffsets[face + 1] - mesh.faceOffsets[face]} corners)`],
+        ['Planarity', fmt(q.get('planarity')[face])],
+        ['Area', fmt(q.get('area')[face])],
+        ['Convex', q.get('convexity')[face] ? 'yes' : 'no'],
+        ['Regularity', Number.isFinite(q.get('regularity')[face]) ? q.get('regularity')[face].toFixed(3) : '–'],
+      ];
+      if (q.invalid) rows.push(['Self-intersecting', q.invalid[face] ? 'yes' : 'no']);
+      if (q.mismatch?.[face]) rows.push(['Convexity', 'against the sign of K']);
+      const distance = q.get('distance');
+      if (distance) rows.push(['Distance to surface', fmt(distance[face])]);
+      tooltip.replaceChildren(...rows.map(([k, v]) => Object.assign(document.createElement('div'), { textContent: `${k}: ${v}` })));
+      const box = $('viewport').getBoundingClientRect();
+      tooltip.style.left = `${event.clientX - box.left + 14}px`;
+      tooltip.style.top = `${event.clientY - box.top + 14}px`;
+    });
+  });
+  viewer.canvas.addEventListener('pointerleave', () => (tooltip.hidden = true));
+}
+
+// ---------------------------------------------------------------- exports
+
+function download(data, name, type) {
+  const link = document.createElement('a');
+  link.href = typeof data === 'string' && data.startsWith('data:') ? data : URL.createObjectURL(new Blob([data], { type }));
+  link.download = name;
+  link.click();
+  setTimeout(() => URL.revokeObjectURL(link.href), 0);
+}
+
+function baseName() {
+  const source = upload ? upload.name.replace(/\.[^.]*$/, '') : last.params.surface;
+  return `phex-${source}-${last.result.metrics.faceCount}`;
+}
+
+/** Typed arrays as plain arrays, for JSON. */
+const plain = (value) => JSON.parse(JSON.stringify(value, (k, v) => (ArrayBuffer.isView(v) ? Array.from(v) : v)));
+
+const EXPORTS = {
+  'export-obj': () => download(meshToOBJ(last.result.hex), `${baseName()}.obj`, 'text/plain'),
+  'export-ply': () => download(meshToPLY(last.result.hex, { planarity: last.result.metrics.planarity }), `${baseName()}.ply`, 'text/plain'),
+  'export-json': () => {
+    const { mesh, ...params } = last.params;
+    const { hex, metrics, solve, timings } = last.result;
+    const json = { generator: `phex ${phex.version}`, params: mesh ? { ...params, mesh: upload?.name } : params, mesh: hex, metrics, solve, timings };
+    download(JSON.stringify(plain(json)), `${baseName()}.json`, 'application/json');
+  },
+  'export-gltf': async () => {
+    const { GLTFExporter } = await import('three/addons/exporters/GLTFExporter.js');
+    const glb = await new GLTFExporter().parseAsync(viewer.exportable(), { binary: true });
+    download(glb, `${baseName()}.glb`, 'model/gltf-binary');
+  },
+  'export-tri': () => download(meshToOBJ(last.result.triangulation), `${baseName()}-triangulation.obj`, 'text/plain'),
+  'export-png': () => download(viewer.snapshot(), `${baseName()}.png`, 'image/png'),
+};
+
+// ---------------------------------------------------------------- start
 
 async function start() {
   setState('running');
   try {
     phex = await createPHex();
     surfaces = await phex.surfaces();
+    capabilities = phex.capabilities();
   } catch (error) {
     showError(`phex could not start: ${error.message}`);
     setState('error');
     return;
   }
-  $('surface').replaceChildren(...surfaces.map((s) => new Option(s.name, s.name, s.name === 'torus', s.name === 'torus')));
-  buildSurfaceParams(surfaces.find((s) => s.name === $('surface').value));
+  document.body.dataset.meshInput = String(capabilities.meshInput);
+  buildForm();
+  const linked = designFromUrl();
+  writeForm(linked?.params ?? { surface: DEFAULT_SURFACE });
+  if (linked?.params.surface && !surfaces.some((s) => s.name === linked.params.surface)) {
+    showError(`The link names an unknown surface "${linked.params.surface}"; showing the ${DEFAULT_SURFACE}.`);
+  }
+  for (const key of VIEW_KEYS) {
+    const value = linked?.view[key];
+    if (key === 'color') colorOptions();
+    if (value && [...$(key).options].some((o) => o.value === value && !o.disabled)) $(key).value = value;
+  }
 
   $('surface').addEventListener('change', () => {
-    buildSurfaceParams(surfaces.find((s) => s.name === $('surface').value));
+    buildSurfaceParams($('surface').value);
+    lastSurfaceKey = null;
     scheduleRun();
   });
   $('params').addEventListener('input', (event) => {
-    if (event.target !== $('surface')) scheduleRun();
+    if (event.target !== $('surface') && event.target !== $('file')) scheduleRun();
   });
   $('params').addEventListener('submit', (event) => {
     event.preventDefault();
     compute();
   });
+  $('file').addEventListener('change', () => {
+    const [file] = $('file').files;
+    $('file').value = '';
+    if (file) openFile(file);
+  });
+  $('mesh-clear').addEventListener('click', () => {
+    setUpload(null);
+    lastSurfaceKey = null;
+    compute();
+  });
   $('cancel').addEventListener('click', () => running?.abort());
-  $('export-obj').addEventListener('click', exportObj);
-  window.addEventListener('error', (event) => showError(String(event.message)));
-  window.addEventListener('unhandledrejection', (event) => showError(String(event.reason?.message ?? event.reason)));
+  $('view').addEventListener('change', () => draw().then(() => last && history.replaceState(null, '', upload ? location.hash : designToHash(last.params))));
+  $('color').addEventListener('change', () => draw().then(() => last && history.replaceState(null, '', upload ? location.hash : designToHash(last.params))));
+  $('wireframe').addEventListener('change', () => viewer.setShading(shading()));
+  $('flat').addEventListener('change', () => draw());
+  $('fit').addEventListener('click', () => viewer.fitToView());
+  for (const [id, action] of Object.entries(EXPORTS)) {
+    $(id).addEventListener('click', () => {
+      if (!last) return;
+      Promise.resolve()
+        .then(action)
+        .catch((error) => showError(`Export failed: ${error.message}`));
+    });
+  }
+  $('copy-link').addEventListener('click', async () => {
+    try {
+      await navigator.clipboard.writeText(location.href);
+      $('stage').textContent = 'link copied';
+    } catch {
+      showError(`Copy this link: ${location.href}`);
+    }
+  });
+  addEventListener('hashchange', () => {
+    const design = designFromUrl();
+    if (!design || location.hash === designToHash(readParams())) return;
+    setUpload(null);
+    writeForm(design.params);
+    compute();
+  });
+  addEventListener('error', (event) => showError(String(event.message)));
+  addEventListener('unhandledrejection', (event) => showError(String(event.reason?.message ?? event.reason)));
+  setUpDrop();
+  setUpHover();
 
-  resize();
+  viewer.resize();
   await compute();
+}
+
+// Offline use: a service worker caches the app shell and the wasm (production builds only).
+if (import.meta.env.PROD && 'serviceWorker' in navigator && location.protocol.startsWith('http')) {
+  addEventListener('load', () => navigator.serviceWorker.register('./sw.js').catch(() => {}));
 }
 
 start();

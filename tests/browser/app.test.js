@@ -1,7 +1,7 @@
 // phex — browser tests of the web app (build/web): headless Chromium through playwright-core.
 // Needs `npx vite build --config web/vite.config.js` (or `npm run build:web`) first, and /usr/bin/chromium.
 import assert from 'node:assert/strict';
-import { existsSync, mkdirSync, mkdtempSync, rmSync } from 'node:fs';
+import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { after, before, test } from 'node:test';
@@ -49,8 +49,8 @@ after(async () => {
 });
 
 /** Counts pixels of a PNG screenshot that differ clearly from the background colour, decoded in the page. */
-async function nonBackgroundPixels(png) {
-  return page.evaluate(
+async function nonBackgroundPixels(png, on = page, background = BACKGROUND) {
+  return on.evaluate(
     async ({ data, background }) => {
       const bitmap = await createImageBitmap(new Blob([Uint8Array.from(atob(data), (c) => c.charCodeAt(0))]));
       const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
@@ -64,7 +64,7 @@ async function nonBackgroundPixels(png) {
       }
       return { count, total: pixels.length / 4 };
     },
-    { data: png.toString('base64'), background: BACKGROUND },
+    { data: png.toString('base64'), background },
   );
 }
 
@@ -114,9 +114,216 @@ test('cancel stops a run and the page stays usable', async () => {
 
 test('export OBJ downloads the mesh', async () => {
   const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-obj')]);
-  const path = await download.path();
-  const { readFileSync } = await import('node:fs');
-  const text = readFileSync(path, 'utf8');
+  const text = readFileSync(await download.path(), 'utf8');
   const faces = text.split('\n').filter((l) => l.startsWith('f ')).length;
   assert.equal(faces, Number(await page.textContent('#face-count')));
+});
+
+
+/** Runs the action and waits until the app has finished the run it started (or the runs it queued). */
+async function afterRun(action, on = page) {
+  const runs = Number(await on.getAttribute('body', 'data-runs'));
+  await action();
+  await on.waitForFunction((n) => Number(document.body.dataset.runs) > n && document.body.dataset.state !== 'running', runs, { timeout: RUN_TIMEOUT_MS });
+}
+
+async function downloadOf(buttonId) {
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click(buttonId)]);
+  return { name: download.suggestedFilename(), data: readFileSync(await download.path()) };
+}
+
+test('export PLY, JSON, glTF, the triangulation and a PNG', async () => {
+  const faceCount = Number(await page.textContent('#face-count'));
+  const ply = (await downloadOf('#export-ply')).data.toString('utf8');
+  assert.match(ply, /^ply\n/);
+  const header = ply.slice(0, ply.indexOf('end_header'));
+  assert.equal(Number(header.match(/element face (\d+)/)[1]), faceCount);
+  const vertices = Number(header.match(/element vertex (\d+)/)[1]);
+  const body = ply.slice(ply.indexOf('end_header') + 11).trimEnd().split('\n');
+  assert.equal(body.length, vertices + faceCount, 'one line per vertex and per face');
+  assert.equal(body.slice(vertices).filter((l) => Number(l.split(' ')[0]) >= 3).length, faceCount);
+
+  const json = JSON.parse((await downloadOf('#export-json')).data.toString('utf8'));
+  assert.equal(json.metrics.faceCount, faceCount);
+  assert.equal(json.mesh.faceOffsets.length, faceCount + 1);
+  assert.equal(json.metrics.planarity.length, faceCount);
+
+  const glb = await downloadOf('#export-gltf');
+  assert.match(glb.name, /\.glb$/);
+  assert.equal(glb.data.subarray(0, 4).toString('latin1'), 'glTF');
+
+  const tri = (await downloadOf('#export-tri')).data.toString('utf8');
+  assert.ok(tri.split('\n').filter((l) => l.startsWith('f ')).length > faceCount, 'about two triangles per hexagon');
+
+  const png = await downloadOf('#export-png');
+  assert.deepEqual([...png.data.subarray(1, 4)], [...Buffer.from('PNG')]);
+  assert.deepEqual(pageErrors, []);
+});
+
+test('a paper-figure preset and a surface switch recompute, and land in the URL', async () => {
+  await afterRun(() => page.click('button[data-preset^="Fig. 11"]'));
+  assert.equal(await page.inputValue('#surface'), 'hyperboloid');
+  assert.equal(await page.getAttribute('body', 'data-state'), 'ready');
+  assert.match(page.url(), /surface=hyperboloid/);
+
+  await afterRun(() => page.selectOption('#surface', 'sphere'));
+  assert.equal(await page.getAttribute('body', 'data-state'), 'ready');
+  assert.match(page.url(), /surface=sphere/);
+  assert.ok(await page.isVisible('#param-latitude'));
+  assert.deepEqual(pageErrors, []);
+});
+
+test('a surface parameter edit re-runs', async () => {
+  const before = await page.textContent('#surface-distance');
+  const positions = await page.textContent('#face-count');
+  await afterRun(() => page.fill('#param-latitude', '40'));
+  assert.equal(await page.getAttribute('body', 'data-state'), 'ready');
+  assert.match(page.url(), /s\.latitude=40/);
+  assert.ok(before !== (await page.textContent('#surface-distance')) || positions !== (await page.textContent('#face-count')), 'a new mesh');
+});
+
+test('views, colour modes and the face tooltip', async () => {
+  for (const view of ['initial', 'triangulation', 'hex']) {
+    await page.selectOption('#view', view);
+    const png = await page.locator('#viewport').screenshot();
+    const { count, total } = await nonBackgroundPixels(png);
+    assert.ok(count > total * 0.02, `${view}: only ${count} of ${total} pixels drawn`);
+  }
+  for (const mode of ['convexity', 'regularity', 'area', 'distance', 'planarity']) {
+    await page.selectOption('#color', mode);
+    assert.ok(await page.isVisible('#legend'), mode);
+  }
+  await page.uncheck('#flat');
+  await page.uncheck('#wireframe');
+  await page.click('#fit');
+  await page.check('#flat');
+  await page.check('#wireframe');
+  const box = await page.locator('#viewport canvas').boundingBox();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.move(box.x + box.width / 2 + 3, box.y + box.height / 2 + 2);
+  await page.waitForSelector('#tooltip:not([hidden])', { timeout: 5000 });
+  assert.match(await page.textContent('#tooltip'), /Planarity/);
+  assert.deepEqual(pageErrors, []);
+});
+
+/** A triangulated patch of a torus as OBJ text. */
+function torusPatchObj(n = 24) {
+  const lines = [];
+  for (let i = 0; i <= n; i++) {
+    for (let j = 0; j <= n; j++) {
+      const u = (i / n) * Math.PI;
+      const v = (j / n) * Math.PI - Math.PI / 2;
+      const rho = 1 + 0.4 * Math.cos(v);
+      lines.push(`v ${rho * Math.cos(u)} ${rho * Math.sin(u)} ${0.4 * Math.sin(v)}`);
+    }
+  }
+  const id = (i, j) => i * (n + 1) + j + 1;
+  for (let i = 0; i < n; i++) {
+    for (let j = 0; j < n; j++) lines.push(`f ${id(i, j)} ${id(i + 1, j)} ${id(i + 1, j + 1)}`, `f ${id(i, j)} ${id(i + 1, j + 1)} ${id(i, j + 1)}`);
+  }
+  return `${lines.join('\n')}\n`;
+}
+
+test('an uploaded OBJ mesh is tiled', async (t) => {
+  if ((await page.getAttribute('body', 'data-mesh-input')) !== 'true') {
+    t.skip('this phex core build has no mesh input (capabilities().meshInput is false)');
+    return;
+  }
+  await afterRun(() => page.setInputFiles('#file', { name: 'torus-patch.obj', mimeType: 'text/plain', buffer: Buffer.from(torusPatchObj()) }));
+  assert.equal(await page.getAttribute('body', 'data-state'), 'ready', await page.textContent('#error'));
+  assert.match(await page.textContent('#mesh-name'), /torus-patch\.obj/);
+  assert.ok(Number(await page.textContent('#face-count')) > 50);
+  await afterRun(() => page.click('#mesh-clear'));
+});
+
+test('a corrupt or foreign file shows an error banner and the app keeps working', async () => {
+  await page.setInputFiles('#file', { name: 'notes.txt', mimeType: 'text/plain', buffer: Buffer.from('hello') });
+  await page.waitForSelector('#error:not([hidden])');
+  assert.match(await page.textContent('#error'), /notes\.txt/);
+
+  await page.setInputFiles('#file', { name: 'broken.obj', mimeType: 'text/plain', buffer: Buffer.from('v 0 0 0\nv 1 nan 0\nf 1 2 9\n') });
+  await page.waitForFunction(() => /broken\.obj/.test(document.getElementById('error').textContent), null, { timeout: RUN_TIMEOUT_MS });
+  await page.waitForFunction(() => document.body.dataset.state !== 'running', null, { timeout: RUN_TIMEOUT_MS });
+  assert.equal(await page.isVisible('#mesh-source'), false, 'the refused file is dropped');
+
+  await afterRun(() => page.fill('#faces', '400'));
+  assert.equal(await page.getAttribute('body', 'data-state'), 'ready');
+  assert.equal(await page.isVisible('#error'), false);
+  assert.deepEqual(pageErrors, []);
+});
+
+test('a file dropped on the page is opened like a picked one', async () => {
+  await page.evaluate(() => {
+    const data = new DataTransfer();
+    data.items.add(new File(['solid nothing\n'], 'dropped.stl'));
+    for (const type of ['dragenter', 'dragover', 'drop']) window.dispatchEvent(new DragEvent(type, { dataTransfer: data, bubbles: true, cancelable: true }));
+  });
+  await page.waitForFunction(() => /dropped\.stl/.test(document.getElementById('error').textContent), null, { timeout: RUN_TIMEOUT_MS });
+  await page.waitForFunction(() => document.body.dataset.state !== 'running', null, { timeout: RUN_TIMEOUT_MS });
+  assert.equal(await page.isVisible('#drop-overlay'), false);
+  assert.deepEqual(pageErrors, []);
+});
+
+test('a link with parameters restores the design', async () => {
+  const other = await context.newPage();
+  try {
+    await other.goto(`${url}/#surface=cyclide&s.uSpan=180&faces=500&duality=tangent&view=initial&color=area`);
+    await other.waitForSelector('body[data-state=ready]', { timeout: RUN_TIMEOUT_MS });
+    assert.equal(await other.inputValue('#surface'), 'cyclide');
+    assert.equal(await other.inputValue('#param-uSpan'), '180');
+    assert.equal(await other.inputValue('#faces'), '500');
+    assert.equal(await other.inputValue('#duality'), 'tangent');
+    assert.equal(await other.inputValue('#view'), 'initial');
+    assert.equal(await other.inputValue('#color'), 'area');
+    const faces = Number(await other.textContent('#face-count'));
+    assert.ok(faces > 250 && faces < 1000, `face count ${faces}`);
+
+    await other.goto(`${url}/#surface=torus&s.r=5`);
+    await other.waitForSelector('body[data-state=error]', { timeout: RUN_TIMEOUT_MS });
+    assert.match(await other.textContent('#error'), /\br\b/);
+  } finally {
+    await other.close();
+  }
+});
+
+test('the embedding example computes a mesh and follows its sliders', async () => {
+  const embed = await context.newPage();
+  const errors = [];
+  embed.on('pageerror', (e) => errors.push(e.message));
+  try {
+    await embed.goto(`${url}/embed/`);
+    await embed.waitForSelector('body[data-state=ready]', { timeout: RUN_TIMEOUT_MS });
+    const first = await embed.textContent('#quote');
+    assert.match(first, /flat panels/);
+    const png = await embed.locator('#view').screenshot();
+    const { count, total } = await nonBackgroundPixels(png, page, [0xf7, 0xf9, 0xfb]);
+    assert.ok(count > total * 0.03, `only ${count} of ${total} pixels show the canopy`);
+
+    await embed.locator('#panels').fill('800');
+    await embed.waitForFunction((q) => document.body.dataset.state === 'ready' && document.getElementById('quote').textContent !== q, first, { timeout: RUN_TIMEOUT_MS });
+    await embed.selectOption('#pattern', 'Saddle');
+    await embed.waitForFunction(() => document.body.dataset.state === 'running' || /panels/.test(document.getElementById('quote').textContent));
+    await embed.waitForSelector('body[data-state=ready]', { timeout: RUN_TIMEOUT_MS });
+    assert.deepEqual(errors, []);
+  } finally {
+    await embed.close();
+  }
+});
+
+test('once loaded, the app works offline (service worker)', async () => {
+  const offline = await serve(webDir, 0);
+  const other = await context.newPage();
+  try {
+    await other.goto(offline.url);
+    await other.waitForSelector('body[data-state=ready]', { timeout: RUN_TIMEOUT_MS });
+    await other.evaluate(() => navigator.serviceWorker.ready.then(() => undefined));
+    offline.server.close();
+    offline.server.closeAllConnections();
+    await other.reload();
+    await other.waitForSelector('body[data-state=ready]', { timeout: RUN_TIMEOUT_MS });
+    assert.ok(Number(await other.textContent('#face-count')) > 1000);
+  } finally {
+    await other.close();
+    offline.server.close();
+  }
 });

@@ -2,7 +2,7 @@
 // Run: node --no-experimental-fetch --test tests/js/   (after `make wasm`)
 import assert from 'node:assert/strict';
 import { before, test } from 'node:test';
-import { createPHex, meshToOBJ, PHexError, triangulateFaces } from '../../build/pkg/phex.js';
+import { createPHex, faceAreas, MESH_FORMATS, meshToOBJ, meshToPLY, PARAMETERS, PHexError, triangulateFaces } from '../../build/pkg/phex.js';
 
 let phex;
 let torus; // the default torus result, shared by the tests that only read it
@@ -137,4 +137,96 @@ test('meshToOBJ writes the vertices and 1-based faces', () => {
   const { faceOffsets, faceIndices } = torus.hex;
   assert.deepEqual(first, [...faceIndices.subarray(faceOffsets[0], faceOffsets[1])].map((v) => v + 1));
   assert.equal(Number(lines[1].split(' ')[1]), torus.hex.positions[0], 'full double precision');
+});
+
+test('capabilities() says what the core build supports, and unsupported parameters are refused by name', async () => {
+  const caps = phex.capabilities();
+  for (const key of ['meshInput', 'lowerBound', 'surfacePreview', 'memory']) assert.equal(typeof caps[key], 'boolean', key);
+  for (const key of ['meshFormats', 'methods', 'fields']) assert.ok(Array.isArray(caps[key]), key);
+  assert.ok(caps.meshFormats.every((f) => MESH_FORMATS.includes(f)));
+  caps.methods.push('changed');
+  assert.ok(!phex.capabilities().methods.includes('changed'), 'callers get their own copy');
+
+  const cases = [
+    [{ surface: 'torus', method: 'progressive' }, 'methods', /method/],
+    [{ surface: 'torus', field: 'angle:30' }, 'fields', /field/],
+    [{ surface: 'torus', lowerBound: 0.2 }, 'lowerBound', /lowerBound/],
+    [{ mesh: new Uint8Array([1, 2, 3]), meshFormat: 'obj' }, 'meshInput', /mesh/],
+  ];
+  for (const [params, capability, message] of cases) {
+    const declared = caps[capability];
+    if (Array.isArray(declared) ? declared.length > 0 : declared) continue; // supported: covered elsewhere
+    const error = await rejection(params);
+    assert.ok(error instanceof PHexError);
+    assert.equal(error.code, 'unsupported', JSON.stringify(params));
+    assert.match(error.message, message);
+  }
+});
+
+test('values of the newer parameters are type-checked by name', async () => {
+  const cases = [
+    [{ surface: 'torus', method: 'magic' }, /method/],
+    [{ surface: 'torus', field: 'angle:abc' }, /field/],
+    [{ surface: 'torus', field: 7 }, /field/],
+    [{ surface: 'torus', lowerBound: Number.POSITIVE_INFINITY }, /lowerBound/],
+    [{ mesh: 'v 0 0 0' }, /mesh must be the bytes/],
+    [{ mesh: new Uint8Array(4), meshFormat: 'dxf' }, /meshFormat/],
+    [{ surface: 'torus', mesh: new Uint8Array(4) }, /either surface or mesh/],
+    [{ surface: 'torus', meshFormat: 'obj' }, /need mesh/],
+  ];
+  for (const [params, message] of cases) {
+    const error = await rejection(params);
+    assert.ok(error instanceof PHexError, String(error));
+    assert.ok(['invalid_parameter', 'unsupported'].includes(error.code), `${JSON.stringify(params)}: ${error.code}`);
+    assert.match(error.message, message, JSON.stringify(params));
+  }
+});
+
+test('PARAMETERS documents every run parameter with its default and range', () => {
+  const names = PARAMETERS.map((p) => p.name);
+  for (const name of ['faces', 'cell', 'tolerance', 'lambda', 'mu', 'maxIterations', 'duality', 'solver']) assert.ok(names.includes(name), name);
+  for (const p of PARAMETERS) {
+    assert.ok(p.description.length > 10, p.name);
+    if (p.type === 'enum') assert.ok(p.values.includes(p.default), p.name);
+    else if (p.type !== 'field') assert.ok(p.min <= p.default && p.default <= p.max, p.name);
+  }
+});
+
+test('memory() reports the wasm heap', async () => {
+  const { heapBytes, usedBytes } = await phex.memory();
+  assert.ok(Number.isInteger(heapBytes) && heapBytes >= 64 * 2 ** 20, `heap ${heapBytes}`);
+  assert.ok(usedBytes === null || (usedBytes > 0 && usedBytes <= heapBytes), `used ${usedBytes}`);
+});
+
+test('meshToPLY and meshToOBJ write meshes and triangulations that parse back', () => {
+  const ply = meshToPLY(torus.hex, { planarity: torus.metrics.planarity }).trimEnd().split('\n');
+  const end = ply.indexOf('end_header');
+  assert.ok(ply.includes(`element vertex ${torus.metrics.vertexCount}`));
+  assert.ok(ply.includes(`element face ${torus.metrics.faceCount}`));
+  assert.equal(ply.length - end - 1, torus.metrics.vertexCount + torus.metrics.faceCount);
+  const firstFace = ply[end + 1 + torus.metrics.vertexCount].split(' ').map(Number);
+  assert.equal(firstFace[0], 6);
+  assert.equal(firstFace.length, 8, 'size, 6 corners, planarity');
+
+  const tri = meshToOBJ(torus.triangulation).split('\n');
+  assert.equal(tri.filter((l) => l.startsWith('f ')).length, torus.triangulation.triangles.length / 3);
+  assert.throws(() => meshToPLY(torus.hex, { bad: [1, 2] }), /bad/);
+});
+
+test('faceAreas gives polygon areas', () => {
+  const square = { positions: new Float64Array([0, 0, 0, 2, 0, 0, 2, 3, 0, 0, 3, 0]), faceOffsets: new Uint32Array([0, 4]), faceIndices: new Uint32Array([0, 1, 2, 3]) };
+  assert.deepEqual([...faceAreas(square)], [6]);
+  const areas = faceAreas(torus.hex);
+  assert.equal(areas.length, torus.metrics.faceCount);
+  assert.ok(areas.every((a) => a > 0));
+  const total = areas.reduce((a, b) => a + b, 0);
+  const exact = 4 * Math.PI ** 2 * 1 * 0.4; // the default torus, R = 1, r = 0.4
+  assert.ok(Math.abs(total - exact) < 0.05 * exact, `total area ${total}, torus ${exact}`);
+});
+
+test('after dispose() every call rejects with code cancelled', async () => {
+  const other = await createPHex();
+  other.dispose();
+  const error = await other.run({ surface: 'torus', faces: 100 }).catch((e) => e);
+  assert.equal(error.code, 'cancelled');
 });

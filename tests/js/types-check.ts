@@ -1,11 +1,12 @@
 // phex — compiled by types.test.js with `tsc --noEmit --strict`: the typings must accept real use.
-import { createPHex, meshToOBJ, PHexError, triangulateFaces } from '../../wasm/js/phex.js';
-import type { Progress, Result, RunParams, SurfaceSpec } from '../../wasm/js/phex.js';
+import { createPHex, faceAreas, MESH_FORMATS, meshToOBJ, meshToPLY, PARAMETERS, PHexError, triangulateFaces } from '../../wasm/js/phex.js';
+import type { Capabilities, MemoryUse, Progress, Result, RunParams, SurfaceSpec } from '../../wasm/js/phex.js';
 
 async function main(): Promise<void> {
   const phex = await createPHex({ worker: false });
   const version: string = phex.version;
   const surfaces: SurfaceSpec[] = await phex.surfaces();
+  const capabilities: Capabilities = phex.capabilities();
   const torus = surfaces.find((s) => s.name === 'torus');
   const params: RunParams = {
     surface: 'torus',
@@ -13,7 +14,10 @@ async function main(): Promise<void> {
     faces: 2000,
     tolerance: 1e-9,
     duality: 'dupin',
+    ...(capabilities.methods.includes('prespecified') ? { method: 'prespecified', field: 'angle:30' } : {}),
   };
+  const upload: RunParams = { mesh: new Uint8Array(0), meshFormat: MESH_FORMATS[0], meshName: 'patch.obj' };
+  const tooltips: string[] = PARAMETERS.map((p) => `${p.name} (${p.min ?? ''}..${p.max ?? ''}, default ${p.default}): ${p.description}`);
   const controller = new AbortController();
   try {
     const result: Result = await phex.run(params, {
@@ -23,10 +27,20 @@ async function main(): Promise<void> {
     const hexagons: number = result.metrics.facesBySize['6'] ?? 0;
     const worst: number = result.metrics.planarity.reduce((a, b) => Math.max(a, b), 0);
     const { positions, index, faceOfTriangle } = triangulateFaces(result.hex);
+    const areas: Float64Array = result.metrics.faceArea ?? faceAreas(result.hex);
+    const lines = result.triangulation.fieldLines;
     const stats: [number, number, number, number, boolean] = [hexagons, worst, positions.length + index.length, faceOfTriangle.length, result.solve.converged];
-    console.log(version, stats, result.timings.total, result.solve.log.map((l) => l.planarityMax), meshToOBJ(result.initial).length);
+    console.log(version, stats, areas.length, lines?.offsets.length, result.timings.total, result.solve.log.map((l) => l.planarityMax), meshToOBJ(result.initial).length);
+    console.log(meshToOBJ(result.triangulation).length, meshToPLY(result.hex, { planarity: result.metrics.planarity }).length, tooltips.length);
+    if (capabilities.surfacePreview) {
+      const preview = await phex.surfacePreview(params);
+      console.log(preview.k1.length + preview.k2.length + preview.triangles.length);
+    }
+    if (capabilities.meshInput) console.log((await phex.run(upload)).metrics.faceCount);
+    const memory: MemoryUse = await phex.memory();
+    console.log(memory.heapBytes, memory.usedBytes ?? 'unknown');
   } catch (error) {
-    if (error instanceof PHexError && error.code === 'cancelled') return;
+    if (error instanceof PHexError && (error.code === 'cancelled' || error.code === 'unsupported')) return;
     throw error;
   } finally {
     phex.dispose();

@@ -77,12 +77,29 @@ export interface Metrics {
   /** Largest and mean of `surfaceDistance`. */
   surfaceDistanceMax: number;
   surfaceDistanceMean: number;
-  /** Per face, where the core provides it: area in model units squared (else compute it with {@link faceAreas}). */
+  /** Per face: area in model units squared (older cores lack it: use {@link faceAreas}). */
   faceArea?: Float64Array;
-  /** Per face, where the core provides it: 1 for a convex face, 0 for a non-convex one (§4.2: convex where K > 0). */
-  convexity?: Uint8Array;
-  /** Per face, where the core provides it: regularity in [0, 1] (1 for a regular polygon). */
+  /** Per face: 1 for a convex face, else 0. */
+  convex?: Uint8Array;
+  /** Per face: 1 where convexity disagrees with the sign of the Gaussian curvature (§4.2: convex where K > 0, non-convex where K < 0). */
+  convexityMismatch?: Uint8Array;
+  convexityMismatchCount?: number;
+  /** Per face: affine regularity in [0, 1] (1 for an affine regular hexagon). */
   regularity?: Float64Array;
+  regularityMean?: number;
+  /** Per face: 1 for a face on the mesh boundary (closed into a planar polygon). */
+  boundaryFace?: Uint8Array;
+  /** Per face: planarity measured on the diagonals (dimensionless). */
+  planarityDiagonals?: Float64Array;
+  /** Edge lengths and face areas of the mesh, in model units. */
+  edgeLengthMin?: number;
+  edgeLengthMax?: number;
+  edgeLengthMean?: number;
+  faceAreaMin?: number;
+  faceAreaMax?: number;
+  faceAreaMean?: number;
+  /** Number of vertices by valence, keyed by the valence as a string. */
+  vertexValence?: Record<string, number>;
 }
 
 /** One iteration of the planarity optimization. */

@@ -1,0 +1,320 @@
+#include "phex/direction_field.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <sstream>
+
+#include "phex/dupin.hpp"
+#include "phex/error.hpp"
+
+namespace phex {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The tangential part of v at g, normalized; nullopt when v is (nearly) normal.
+std::optional<Vec3> tangentUnit(const LocalGeometry& g, const Vec3& v) {
+  const Vec3 t = v - v.dot(g.normal) * g.normal;
+  const double n = t.norm();
+  if (!(n > 1e-12 * v.norm()) || !std::isfinite(n)) return std::nullopt;
+  return Vec3(t / n);
+}
+
+// Every direction is principal at an umbilic or planar point: the principal fields are undefined there.
+bool isUmbilic(const LocalGeometry& g, double cell) {
+  const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
+  return g.k1 - g.k2 <= 1e-6 * kmax || kmax * cell <= 1e-9;
+}
+
+double parseNumber(const std::string& text, const std::string& whole) {
+  char* end = nullptr;
+  const double x = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(x))
+    throw Error(ErrorCode::InvalidParameter, "direction field '" + whole + "': '" + text + "' is not a number");
+  return x;
+}
+
+}  // namespace
+
+SurfaceWalker::SurfaceWalker(const Surface& surface, double cell)
+    : surface_(surface), parametric_(dynamic_cast<const ParametricSurface*>(&surface)), cell_(cell) {
+  if (!(cell > 0) || !std::isfinite(cell))
+    throw Error(ErrorCode::InvalidParameter, "cell size must be positive and finite");
+}
+
+SurfacePoint SurfaceWalker::project(const Vec3& p) const {
+  const LocalGeometry g = surface_.closestPoint(p);
+  if (!parametric_) return {g, Vec2::Zero()};
+  // closestPoint does not return parameters: refine from the nearest parameter of a coarse grid.
+  const ParametricSurface::Domain d = parametric_->domain();
+  Vec2 best(d.u0, d.v0);
+  double bestDistance = std::numeric_limits<double>::infinity();
+  constexpr int n = 32;
+  for (int i = 0; i <= n; ++i)
+    for (int k = 0; k <= n; ++k) {
+      const Vec2 uv(d.u0 + (d.u1 - d.u0) * i / n, d.v0 + (d.v1 - d.v0) * k / n);
+      const double dist = (parametric_->position(uv.x(), uv.y()) - g.point).squaredNorm();
+      if (dist < bestDistance) bestDistance = dist, best = uv;
+    }
+  const Vec2 uv = parametric_->project(g.point, best);
+  return {parametric_->geometryAt(uv.x(), uv.y()), uv};
+}
+
+SurfacePoint SurfaceWalker::project(const Vec3& p, const SurfacePoint& near) const {
+  if (!parametric_) return {surface_.closestPoint(p), Vec2::Zero()};
+  const Vec2 uv = parametric_->project(p, near.uv);
+  return {parametric_->geometryAt(uv.x(), uv.y()), uv};
+}
+
+bool SurfaceWalker::isOutside(const Vec3& p, const SurfacePoint& foot) const {
+  const Vec3 t = p - foot.point();
+  return (t - t.dot(foot.g.normal) * foot.g.normal).norm() > outsideTolerance();
+}
+
+FieldSpec parseFieldSpec(const std::string& text) {
+  const std::size_t colon = text.find(':');
+  const std::string name = text.substr(0, colon);
+  const bool hasArgument = colon != std::string::npos;
+  const std::string argument = hasArgument ? text.substr(colon + 1) : "";
+  FieldSpec spec;
+  auto noArgument = [&] {
+    if (hasArgument)
+      throw Error(ErrorCode::InvalidParameter, "direction field '" + text + "': '" + name + "' takes no value");
+  };
+  auto degreesIn = [&](double lo, double hi, double fallback) {
+    if (!hasArgument) return fallback;
+    const double x = parseNumber(argument, text);
+    if (x < lo || x > hi) {
+      std::ostringstream msg;
+      msg << "direction field '" << text << "': " << x << " degrees is outside [" << lo << ", " << hi << "]";
+      throw Error(ErrorCode::InvalidParameter, msg.str());
+    }
+    return x;
+  };
+  if (name == "principal") {
+    noArgument();
+    spec.kind = FieldKind::Principal;
+  } else if (name == "angle") {
+    if (!hasArgument)
+      throw Error(ErrorCode::InvalidParameter, "direction field '" + text + "': write angle:DEG, e.g. angle:30");
+    spec.kind = FieldKind::Angle;
+    spec.degrees = degreesIn(-180, 180, 0);
+  } else if (name == "param") {
+    spec.kind = FieldKind::Param;
+    if (hasArgument && argument != "u" && argument != "v")
+      throw Error(ErrorCode::InvalidParameter, "direction field '" + text + "': write param, param:u or param:v");
+    spec.paramV = argument == "v";
+  } else if (name == "radial") {
+    noArgument();
+    spec.kind = FieldKind::Radial;
+  } else if (name == "diverging") {
+    spec.kind = FieldKind::Diverging;
+    spec.degrees = degreesIn(0, 89, 20);
+  } else if (name == "spiral") {
+    spec.kind = FieldKind::Spiral;
+    spec.degrees = degreesIn(-89, 89, 45);
+  } else {
+    throw Error(ErrorCode::InvalidParameter, "unknown direction field '" + text +
+                                                 "' (known: principal, angle:DEG, param, param:v, radial, "
+                                                 "diverging[:DEG], spiral[:DEG])");
+  }
+  return spec;
+}
+
+std::string fieldSpecName(const FieldSpec& spec) {
+  std::ostringstream s;
+  switch (spec.kind) {
+    case FieldKind::Principal: s << "principal"; break;
+    case FieldKind::Angle: s << "angle:" << spec.degrees; break;
+    case FieldKind::Param: s << (spec.paramV ? "param:v" : "param:u"); break;
+    case FieldKind::Radial: s << "radial"; break;
+    case FieldKind::Diverging: s << "diverging:" << spec.degrees; break;
+    case FieldKind::Spiral: s << "spiral:" << spec.degrees; break;
+  }
+  return s.str();
+}
+
+DirectionField::DirectionField(const SurfaceWalker& walker, const FieldSpec& spec) : walker_(walker), spec_(spec) {
+  if (spec.kind == FieldKind::Param && !walker.parametric())
+    throw Error(ErrorCode::InvalidParameter, "direction field 'param' needs a parametric surface, and '" +
+                                                 walker.surface().name() + "' is not one");
+  const double tilt = spec.kind == FieldKind::Diverging ? spec.degrees * kPi / 180 : 0.0;
+  axis_ = Vec3(std::sin(tilt), 0, std::cos(tilt));
+  centre_ = walker.surface().bounds().center();
+}
+
+std::optional<Vec3> DirectionField::first(const SurfacePoint& p) const {
+  const LocalGeometry& g = p.g;
+  const double rad = spec_.degrees * kPi / 180;
+  switch (spec_.kind) {
+    case FieldKind::Principal:
+    case FieldKind::Angle:
+      if (isUmbilic(g, walker_.cell())) return std::nullopt;
+      return Vec3(std::cos(rad) * g.d1 + std::sin(rad) * g.d2);
+    case FieldKind::Param: {
+      const ParametricSurface::Jet j = walker_.parametric()->jet(p.uv.x(), p.uv.y());
+      return tangentUnit(g, spec_.paramV ? j.Pv : j.Pu);
+    }
+    case FieldKind::Radial:
+    case FieldKind::Diverging:
+    case FieldKind::Spiral: {
+      // The meridian: the section by the plane through the axis and p.
+      const Vec3 planeNormal = axis_.cross(p.point() - centre_);
+      if (!(planeNormal.norm() > 1e-9 * std::max(walker_.cell(), (p.point() - centre_).norm()))) return std::nullopt;
+      const std::optional<Vec3> meridian = tangentUnit(g, g.normal.cross(planeNormal));
+      if (!meridian || spec_.kind != FieldKind::Spiral) return meridian;
+      // Loxodrome: a fixed angle to the meridians.
+      return Vec3(std::cos(rad) * *meridian + std::sin(rad) * g.normal.cross(*meridian));
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<Vec3> DirectionField::direction(const SurfacePoint& p, Family family, const Vec3* previous) const {
+  const LocalGeometry& g = p.g;
+  std::optional<Vec3> d = first(p);
+  bool anyIsFine = !d && (spec_.kind == FieldKind::Principal || spec_.kind == FieldKind::Angle);
+  if (d && family == Family::Conjugate) {
+    if (spec_.kind == FieldKind::Principal) {
+      d = g.normal.cross(*d);  // principal directions are conjugate and orthogonal
+    } else {
+      const std::optional<Vec2> c = conjugateDirection(g, tangentVector(g, *d));
+      // §5.3: at a parabolic point the zero-curvature direction is conjugate to every direction.
+      anyIsFine = !c;
+      d = c ? std::optional<Vec3>(spatialVector(g, *c)) : std::nullopt;
+    }
+  }
+  if (!d && anyIsFine && previous) d = tangentUnit(g, *previous);
+  if (d && previous && d->dot(*previous) < 0) *d = -*d;
+  return d;
+}
+
+double polylineLength(const std::vector<SurfacePoint>& polyline, bool closed) {
+  double length = 0;
+  for (std::size_t i = 1; i < polyline.size(); ++i) length += (polyline[i].point() - polyline[i - 1].point()).norm();
+  if (closed && polyline.size() > 1) length += (polyline.front().point() - polyline.back().point()).norm();
+  return length;
+}
+
+FlowLine traceFlowLine(const DirectionField& field, Family family, const SurfacePoint& start, const Vec3& initial,
+                       double maxLength, bool detectClosure) {
+  const SurfaceWalker& walker = field.walker();
+  const double cell = walker.cell(), tolerance = 1e-4 * cell, maxStep = 0.5 * cell, minStep = 1e-3 * cell;
+  FlowLine line;
+  line.points.push_back(start);
+  std::optional<Vec3> k1 = field.direction(start, family, &initial);
+  if (!k1) {
+    line.end = FlowLine::End::Singularity;
+    return line;
+  }
+  const Vec3 startDirection = *k1;
+  SurfacePoint current = start;
+  double h = 0.25 * cell;
+  while (line.length < maxLength) {
+    h = std::min(h, maxLength - line.length);
+    if (h < 1e-9 * cell) break;
+    // Bogacki–Shampine RK 3(2) in space; each stage is evaluated at the projection of its point.
+    const Vec3 x = current.point();
+    const SurfacePoint p2 = walker.project(x + 0.5 * h * *k1, current);
+    const std::optional<Vec3> k2 = field.direction(p2, family, &*k1);
+    const std::optional<Vec3> k3 =
+        k2 ? field.direction(walker.project(x + 0.75 * h * *k2, current), family, &*k2) : std::nullopt;
+    if (!k3) {
+      if (h > minStep) {
+        h *= 0.25;
+        continue;
+      }
+      line.end = FlowLine::End::Singularity;
+      return line;
+    }
+    const Vec3 next = x + h * (2.0 / 9 * *k1 + 1.0 / 3 * *k2 + 4.0 / 9 * *k3);
+    const SurfacePoint pn = walker.project(next, current);
+    if (walker.isOutside(next, pn)) {
+      // Locate the boundary crossing by bisection on the step.
+      double inside = 0, outside = 1;
+      SurfacePoint last = current;
+      for (int it = 0; it < 10; ++it) {
+        const double t = 0.5 * (inside + outside);
+        const Vec3 q = x + t * (next - x);
+        const SurfacePoint pq = walker.project(q, current);
+        if (walker.isOutside(q, pq)) {
+          outside = t;
+        } else {
+          inside = t;
+          last = pq;
+        }
+      }
+      if (inside > 0) {
+        line.length += (last.point() - x).norm();
+        line.points.push_back(last);
+      }
+      line.end = FlowLine::End::Boundary;
+      return line;
+    }
+    const std::optional<Vec3> k4 = field.direction(pn, family, &*k3);
+    const double error = h * (-5.0 / 72 * *k1 + 1.0 / 12 * *k2 + 1.0 / 9 * *k3 - 1.0 / 8 * k4.value_or(*k3)).norm();
+    if (error > tolerance && h > minStep) {
+      h *= std::max(0.2, 0.9 * std::cbrt(tolerance / error));
+      continue;
+    }
+    const double segment = (pn.point() - x).norm();
+    if (detectClosure && line.length + segment > 3 * cell) {
+      // Back at the start, heading the same way: a loop. Close it exactly at the start.
+      const Vec3 s = pn.point() - x;
+      const double t = std::clamp((start.point() - x).dot(s) / std::max(s.squaredNorm(), 1e-300), 0.0, 1.0);
+      if ((x + t * s - start.point()).norm() < 0.25 * cell && s.dot(startDirection) > 0.5 * segment) {
+        line.length += (start.point() - x).norm();
+        line.end = FlowLine::End::Closed;
+        return line;
+      }
+    }
+    line.points.push_back(pn);
+    line.length += segment;
+    current = pn;
+    if (!k4) {
+      line.end = FlowLine::End::Singularity;
+      return line;
+    }
+    k1 = k4;
+    h = std::min(maxStep, h * std::min(4.0, 0.9 * std::cbrt(tolerance / std::max(error, 1e-300))));
+  }
+  line.end = FlowLine::End::Length;
+  return line;
+}
+
+std::vector<SurfacePoint> sampleByArcLength(const SurfaceWalker& walker, const std::vector<SurfacePoint>& polyline,
+                                            bool closed, double spacing) {
+  std::vector<SurfacePoint> samples;
+  if (polyline.empty()) return samples;
+  std::vector<SurfacePoint> path = polyline;
+  if (closed) path.push_back(polyline.front());
+  std::vector<double> arc(path.size(), 0.0);
+  for (std::size_t i = 1; i < path.size(); ++i) arc[i] = arc[i - 1] + (path[i].point() - path[i - 1].point()).norm();
+  const double length = arc.back();
+  int count;
+  double step = spacing;
+  if (closed) {
+    count = std::max(3, static_cast<int>(std::lround(length / spacing)));
+    step = length / count;
+  } else {
+    count = static_cast<int>(std::floor(length / spacing + 1e-9)) + 1;
+  }
+  std::size_t k = 1;
+  for (int i = 0; i < count; ++i) {
+    const double t = i * step;
+    while (k + 1 < path.size() && arc[k] < t) ++k;
+    const double span = arc[k] - arc[k - 1];
+    const double w = span > 0 ? std::clamp((t - arc[k - 1]) / span, 0.0, 1.0) : 0.0;
+    if (w == 0.0) {
+      samples.push_back(path[k - 1]);
+    } else {
+      const Vec3 q = (1 - w) * path[k - 1].point() + w * path[k].point();
+      samples.push_back(walker.project(q, path[k - 1]));
+    }
+  }
+  return samples;
+}
+
+}  // namespace phex

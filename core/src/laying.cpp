@@ -1,0 +1,923 @@
+#include "phex/laying.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <unordered_map>
+
+#include "phex/dupin.hpp"
+#include "phex/error.hpp"
+#include "phex/ideal_triangle.hpp"
+
+namespace phex {
+namespace {
+
+constexpr double kSqrt3 = 1.7320508075688772;
+constexpr double kEquilateralRatio = 0.5 * kSqrt3;  // |CM| / |AB| of an equilateral triangle (planar points)
+// A conjugate direction closer than ~8.6 degrees to AB is as good as asymptotic: the triangles would be slivers.
+constexpr double kMinConjugateSine = 0.15;
+constexpr double kResampleBelow = 0.55, kResampleAbove = 1.8;  // row spacing / cell that triggers a resample
+constexpr double kValidMargin = 1.1;  // Method 2 keeps the apexes this far above DE (in units of validStep)
+constexpr double kZipGap = 1.6;       // fronts facing each other closer than this many steps are zipped
+constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
+
+const char* const kAsymptoticBase =
+    "the base curve runs (almost) along an asymptotic direction, which is self-conjugate (§4.2, Prop. 5), so no "
+    "triangle on it gives a valid star; choose a field further from the asymptotic directions (e.g. principal), the "
+    "other base family, or the other method";
+
+std::string describe(const SurfaceWalker& walker, const SurfacePoint& p) {
+  std::ostringstream s;
+  s.precision(4);
+  s << "(" << p.point().x() << ", " << p.point().y() << ", " << p.point().z() << ")";
+  if (walker.parametric()) s << " [u, v = " << p.uv.x() << ", " << p.uv.y() << "]";
+  return s.str();
+}
+
+double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+std::vector<double> cumulativeArc(const std::vector<SurfacePoint>& curve) {
+  std::vector<double> arc(curve.size(), 0.0);
+  for (std::size_t i = 1; i < curve.size(); ++i) arc[i] = arc[i - 1] + (curve[i].point() - curve[i - 1].point()).norm();
+  return arc;
+}
+
+// A row of vertices: the current base curve of a front, which advances to its left (seen from the normal).
+struct Row {
+  std::vector<int> ids;
+  bool closed = false;
+  // The curve the vertices lie on, with their arc lengths along it: for Method 2 the flow line L_k of D_F
+  // (running on to the boundary past the end vertices), for Method 1 the row's own polyline.
+  std::vector<SurfacePoint> curve;
+  std::vector<double> curveArc;  // cumulative from curve[0]
+  double curveLength = 0;        // with the closing segment on a closed curve
+  std::vector<double> sampleArc; // #ids, increasing
+};
+
+struct Front {
+  Row row;
+  bool active = true;
+  double lastStep = 0;  // mean |MC| of its last layer
+  int layers = 0;
+};
+
+// One base segment A_i A_{i+1} of a layer with the apex direction and step of §5.1 and §5.3.
+struct Segment {
+  SurfacePoint M;        // midpoint, on the surface
+  Vec3 left;             // unit tangent at M towards the apex: conjugate to AB (§5.1)
+  Vec3 apexInPlane;      // M + step * left, in the tangent plane at M
+  double base = 0;       // |AB|
+  double step = 0;       // |MC| to lay
+  double validStep = 0;  // any apex beyond it on l keeps the star valid (Props 4, 5); 0 at parabolic points
+  double ratio = 0;      // step / base, kept on the apex for §5.3 re-use
+  bool bounded = false, reused = false;
+  bool asymptotic = false;  // AB runs (nearly) along an asymptotic direction: no valid triangle on it
+};
+
+struct Apex {
+  SurfacePoint p;
+  double ratio = 0;  // step / base it was laid with
+  double arc = 0;    // Method 2: arc length along the next base curve
+};
+
+// The point at arc length t of a curve (wrapping on a closed one), projected onto the surface. Between two
+// curve points it follows a cubic through their neighbours: a chord would cut inside the curve
+// and, projected back, move sideways along the surface by the sagitta, enough near a parabolic curve to
+// turn the next conjugate directions (§5.3).
+SurfacePoint pointAtArc(const SurfaceWalker& walker, const std::vector<SurfacePoint>& curve,
+                        const std::vector<double>& arc, bool closed, double length, double t) {
+  const int n = static_cast<int>(curve.size());
+  int k;  // t lies between curve points k and k + 1 (mod n on a closed curve)
+  double w;
+  if (closed) {
+    t = std::fmod(t, length);
+    if (t < 0) t += length;
+  } else {
+    t = std::clamp(t, 0.0, arc.back());
+  }
+  if (t >= arc.back()) {
+    if (!closed || length <= arc.back()) return curve.back();
+    k = n - 1;
+    w = (t - arc.back()) / (length - arc.back());
+  } else {
+    k = static_cast<int>(std::upper_bound(arc.begin(), arc.end(), t) - arc.begin()) - 1;
+    const double span = arc[k + 1] - arc[k];
+    w = span > 0 ? (t - arc[k]) / span : 0.0;
+  }
+  if (w <= 0) return curve[k];
+  auto at = [&](int j) -> const Vec3& {
+    return curve[closed ? ((j % n) + n) % n : std::clamp(j, 0, n - 1)].point();
+  };
+  // Cubic Hermite with tangents from the neighbours, scaled by the chord lengths (uneven RK steps).
+  const Vec3 &p0 = at(k - 1), &p1 = at(k), &p2 = at(k + 1), &p3 = at(k + 2);
+  const double d01 = (p1 - p0).norm(), d12 = (p2 - p1).norm(), d23 = (p3 - p2).norm();
+  const Vec3 m1 = d12 * (p2 - p0) / std::max(d01 + d12, 1e-300), m2 = d12 * (p3 - p1) / std::max(d12 + d23, 1e-300);
+  const double w2 = w * w, w3 = w2 * w;
+  const Vec3 q = (2 * w3 - 3 * w2 + 1) * p1 + (w3 - 2 * w2 + w) * m1 + (3 * w2 - 2 * w3) * p2 + (w3 - w2) * m2;
+  return walker.project(q, curve[k]);
+}
+
+// A uniform grid over vertex positions, for the collision test.
+class PointGrid {
+ public:
+  explicit PointGrid(double spacing) : spacing_(spacing) {}
+  void insert(int id, const Vec3& p) { cells_[key(p, 0, 0, 0)].push_back(id); }
+  template <class Visit>
+  void forNear(const Vec3& p, Visit visit) const {
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = cells_.find(key(p, dx, dy, dz));
+          if (it != cells_.end())
+            for (int id : it->second) visit(id);
+        }
+  }
+
+ private:
+  std::int64_t key(const Vec3& p, int dx, int dy, int dz) const {
+    auto c = [&](double x, int d) { return (static_cast<std::int64_t>(std::floor(x / spacing_)) + d) & 0x1FFFFF; };
+    return c(p.x(), dx) | (c(p.y(), dy) << 21) | (c(p.z(), dz) << 42);
+  }
+  double spacing_;
+  std::unordered_map<std::int64_t, std::vector<int>> cells_;
+};
+
+// Where a curve crosses the short flow line l (both on the surface), found in the tangent plane at l's start.
+struct Crossing {
+  double ellArc;   // arc length along l
+  Vec3 point;
+  double curveArc; // arc length along the curve
+};
+
+class Laying {
+ public:
+  Laying(const SurfaceWalker& walker, const DirectionField& field, const LayingOptions& options, Family baseFamily,
+         const ProgressFn& progress, const CancelFlag* cancel)
+      : walker_(walker),
+        field_(field),
+        o_(options),
+        F_(baseFamily),
+        G_(baseFamily == Family::First ? Family::Conjugate : Family::First),
+        progress_(progress),
+        cancel_(cancel),
+        grid_(options.cell) {}
+
+  Triangulation run(const SurfacePoint& start, const Vec3& initial);
+
+ private:
+  int addVertex(const SurfacePoint& p, double ratio);
+  Row baseCurve(const SurfacePoint& start, const Vec3& initial);
+  bool zipIfMeeting(std::size_t f);
+  bool facing(const Front& a, const Front& b) const;
+  void layLayer(std::size_t f);
+  bool extendRow(Row& row, bool atStart);
+  Segment segment(const Row& row, int i) const;
+  std::vector<std::optional<Apex>> progressiveApexes(const Row& row, const std::vector<Segment>& segments) const;
+  std::vector<std::optional<Apex>> prespecifiedApexes(const Row& row, const std::vector<Segment>& segments, Row& next,
+                                                      bool recordConjugateLines);
+  bool collides(const Vec3& p, double radius) const;
+  void zip(std::vector<int> P, bool closedP, std::vector<int> Q, bool closedQ);
+  void setOwnCurve(Row& row) const;
+  std::optional<Crossing> crossCurve(const LocalGeometry& g, const FlowLine& ell, const std::vector<double>& ellArc,
+                                     const Row& curve, int& hint) const;
+  [[noreturn]] void cannotTile(const SurfacePoint& where, const std::string& why) const;
+
+  const SurfaceWalker& walker_;
+  const DirectionField& field_;
+  const LayingOptions& o_;
+  const Family F_, G_;  // base curves follow F_, apexes go along G_ (its conjugate)
+  const ProgressFn& progress_;
+  const CancelFlag* cancel_;
+
+  std::vector<SurfacePoint> vertices_;
+  std::vector<double> vertexRatio_;  // the step ratio each vertex was laid with (NaN on L0): §5.3 re-use
+  std::vector<char> inBase_;         // vertices of the row being laid from (exempt from the collision test)
+  std::vector<Eigen::Vector3i> triangles_;
+  PointGrid grid_;
+  std::vector<Front> fronts_;
+  std::vector<std::vector<Vec3>> fieldLines_;
+
+  // What happened, for the notes.
+  int boundedLayers_ = 0, boundedSegments_ = 0, reusedLayers_ = 0, reusedSegments_ = 0, parabolicSegments_ = 0;
+  int resampled_ = 0, boundaryStops_ = 0, collisions_ = 0, invalidDrops_ = 0, splits_ = 0, layers_ = 0;
+  int asymptoticStops_ = 0;
+  std::string firstResample_, firstInvalidDrop_, firstReuse_, firstAsymptoticStop_;
+  std::vector<std::string> zipNotes_;
+};
+
+void Laying::cannotTile(const SurfacePoint& where, const std::string& why) const {
+  throw Error(ErrorCode::CannotTile,
+              "cannot lay a valid triangulation with field '" + fieldSpecName(field_.spec()) + "' (" +
+                  layingMethodName(o_.method) + " method) near " + describe(walker_, where) + ": " + why);
+}
+
+int Laying::addVertex(const SurfacePoint& p, double ratio) {
+  if (static_cast<int>(vertices_.size()) >= o_.maxVertices) {
+    std::ostringstream msg;
+    msg << "cell " << o_.cell << " is too small for this surface: more than maxVertices = " << o_.maxVertices
+        << " vertices would be laid";
+    throw Error(ErrorCode::InvalidParameter, msg.str());
+  }
+  const int id = static_cast<int>(vertices_.size());
+  vertices_.push_back(p);
+  vertexRatio_.push_back(ratio);
+  inBase_.push_back(0);
+  grid_.insert(id, p.point());
+  return id;
+}
+
+void Laying::setOwnCurve(Row& row) const {
+  row.curve.clear();
+  for (int id : row.ids) row.curve.push_back(vertices_[id]);
+  row.curveArc = cumulativeArc(row.curve);
+  row.curveLength = row.curveArc.back() +
+                    (row.closed ? (row.curve.back().point() - row.curve.front().point()).norm() : 0.0);
+  row.sampleArc = row.curveArc;
+}
+
+// L0: the flow line of D_F through the start, both ways to the boundary or once around a loop, sampled every
+// cell from the start.
+Row Laying::baseCurve(const SurfacePoint& start, const Vec3& initial) {
+  const double reach = 4 * walker_.surface().bounds().diagonal().norm() + 10 * o_.cell;
+  const FlowLine forward = traceFlowLine(field_, F_, start, initial, reach, true);
+  Row row;
+  std::vector<double> arcs;
+  if (forward.end == FlowLine::End::Closed) {
+    row.closed = true;
+    row.curve = forward.points;
+    row.curveArc = cumulativeArc(row.curve);
+    row.curveLength = forward.length;
+    const int n = std::max(3, static_cast<int>(std::lround(forward.length / o_.cell)));
+    for (int i = 0; i < n; ++i) arcs.push_back(forward.length * i / n);
+  } else {
+    const FlowLine backward = traceFlowLine(field_, F_, start, -initial, reach, false);
+    row.curve.assign(backward.points.rbegin(), backward.points.rend());
+    row.curve.insert(row.curve.end(), forward.points.begin() + 1, forward.points.end());
+    row.curveArc = cumulativeArc(row.curve);
+    row.curveLength = row.curveArc.back();
+    const double s0 = backward.length;
+    for (int k = -static_cast<int>(std::floor(s0 / o_.cell + 1e-9)); s0 + k * o_.cell <= row.curveLength + 1e-9 * o_.cell; ++k)
+      arcs.push_back(s0 + k * o_.cell);
+  }
+  if (arcs.size() < 2)
+    cannotTile(start, "the base curve (a flow line of the field) is shorter than one cell, " +
+                          std::string(forward.end == FlowLine::End::Singularity ? "ending at a singularity of the field"
+                                                                                : "ending at the boundary") +
+                          "; choose a smaller cell, another start or another field");
+  for (double t : arcs) {
+    const SurfacePoint p = pointAtArc(walker_, row.curve, row.curveArc, row.closed, row.curveLength, t);
+    row.ids.push_back(addVertex(p, std::numeric_limits<double>::quiet_NaN()));
+  }
+  row.sampleArc = arcs;
+  std::vector<Vec3> line;
+  for (const SurfacePoint& p : row.curve) line.push_back(p.point());
+  if (row.closed) line.push_back(row.curve.front().point());
+  fieldLines_.push_back(line);
+  if (o_.method == LayingMethod::Progressive) setOwnCurve(row);
+  return row;
+}
+
+Row reversed(Row row) {
+  std::reverse(row.ids.begin(), row.ids.end());
+  std::reverse(row.curve.begin(), row.curve.end());
+  row.curveArc = cumulativeArc(row.curve);
+  // Arc t from the old start is arc (last - t) from the new one, modulo the length around a loop.
+  const double last = row.curveArc.back();
+  for (double& a : row.sampleArc) a = row.closed ? std::fmod(last - a + row.curveLength, row.curveLength) : last - a;
+  std::reverse(row.sampleArc.begin(), row.sampleArc.end());
+  return row;
+}
+
+// The segment's apex direction and step: §5.1 (ideal triangle) with §5.3 (lower bound, re-use at parabolic curves).
+Segment Laying::segment(const Row& row, int i) const {
+  const int n = static_cast<int>(row.ids.size());
+  const SurfacePoint& A = vertices_[row.ids[i]];
+  const SurfacePoint& B = vertices_[row.ids[(i + 1) % n]];
+  Segment s;
+  s.M = walker_.project(0.5 * (A.point() + B.point()), A);
+  const LocalGeometry& g = s.M.g;
+  const Vec2 a = toTangentPlane(g, A.point()), b = toTangentPlane(g, B.point());
+  s.base = (b - a).norm();
+  const Vec2 along = (b - a) / s.base;
+  const double ra = vertexRatio_[row.ids[i]], rb = vertexRatio_[row.ids[(i + 1) % n]];
+  const double previous = std::isnan(ra) ? rb : std::isnan(rb) ? ra : 0.5 * (ra + rb);
+  const IdealApex ideal = idealApex(g, a, b, Side::Left);
+  Vec2 direction(-along.y(), along.x());
+  double r;
+  switch (ideal.status) {
+    case IdealApex::Status::Ok: {
+      if (std::abs(cross2(along, ideal.direction)) < kMinConjugateSine) {
+        s.asymptotic = true;
+        return s;
+      }
+      direction = ideal.direction;
+      s.validStep = ideal.validStep;
+      r = ideal.step / s.base;
+      if (r > o_.maxStepRatio) {
+        // §5.3: the zero-curvature direction points across a parabolic curve and the ideal step explodes.
+        s.reused = true;
+        r = std::isnan(previous) ? o_.maxStepRatio : previous;
+      } else if (o_.lowerBound > 0) {
+        const double bounded = stepLowerBound(r, o_.lowerBound);
+        s.bounded = bounded > r;
+        // Where the bound takes over, the curvature along AB is vanishing and its conjugate direction turns
+        // wildly with AB's slightest wobble; the triangle is no longer ideal anyway, so the apex direction is
+        // eased towards the normal of AB as the bound dominates.
+        const double eased = 1 - r / bounded;
+        direction = ((1 - eased) * direction + eased * Vec2(-along.y(), along.x())).normalized();
+        r = bounded;
+      }
+      break;
+    }
+    case IdealApex::Status::Parabolic: {
+      // §5.3: no Dupin conic. The conjugate of AB is the zero-curvature direction (the ruling of a developable)
+      // unless AB is that direction itself; the step is the previous layer's, or equilateral (the plane).
+      const std::optional<Vec2> c = conjugateDirection(g, b - a);
+      if (c && std::abs(cross2(along, *c)) >= kMinConjugateSine) direction = *c;
+      s.reused = !std::isnan(previous);
+      r = s.reused ? previous : kEquilateralRatio;
+      break;
+    }
+    case IdealApex::Status::Asymptotic:
+      s.asymptotic = true;
+      return s;
+    case IdealApex::Status::Degenerate:
+    default:
+      throw Error(ErrorCode::Internal, "laying: a degenerate base segment at " + describe(walker_, s.M));
+  }
+  s.ratio = r;
+  s.step = r * s.base;
+  s.left = spatialVector(g, direction).normalized();
+  s.apexInPlane = fromTangentPlane(g, 0.5 * (a + b) + s.step * direction);
+  return s;
+}
+
+bool Laying::collides(const Vec3& p, double radius) const {
+  bool hit = false;
+  grid_.forNear(p, [&](int id) { hit = hit || (!inBase_[id] && (vertices_[id].point() - p).norm() < radius); });
+  return hit;
+}
+
+// Method 1 (§5.2, Fig. 14): the ideal apex in the tangent plane at M_i, projected onto the surface.
+// Laying conjugate rows forward is a Cauchy problem, ill-posed where K > 0: wobble at the sample spacing
+// (round-off, projection) grows from layer to layer. The apex offsets M_i -> C_i are therefore smoothed along
+// the row with weights (1, 2, 1) / 4, which removes that wobble and leaves smooth variations (rotated copies
+// on a surface of revolution) nearly untouched.
+std::vector<std::optional<Apex>> Laying::progressiveApexes(const Row& row, const std::vector<Segment>& segments) const {
+  const int n = static_cast<int>(segments.size());
+  std::vector<std::optional<Apex>> apexes(n);
+  auto usable = [&](int i) { return i >= 0 && i < n && !segments[i].asymptotic; };
+  for (int i = 0; i < n; ++i) {
+    const Segment& s = segments[i];
+    if (s.asymptotic) continue;
+    const int before = row.closed ? (i + n - 1) % n : i - 1, after = row.closed ? (i + 1) % n : i + 1;
+    Vec3 offset = s.apexInPlane - s.M.point();
+    if (usable(before) && usable(after))
+      offset = 0.5 * offset + 0.25 * (segments[before].apexInPlane - segments[before].M.point() +
+                                      segments[after].apexInPlane - segments[after].M.point());
+    const Vec3 x = s.M.point() + offset;
+    const SurfacePoint p = walker_.project(x, s.M);
+    if (!walker_.isOutside(x, p)) apexes[i] = Apex{p, s.ratio, 0.0};
+  }
+  return apexes;
+}
+
+std::optional<Crossing> Laying::crossCurve(const LocalGeometry& g, const FlowLine& ell, const std::vector<double>& ellArc,
+                                           const Row& L, int& hint) const {
+  const int n = static_cast<int>(L.curve.size());
+  const int segments = L.closed ? n : n - 1;
+  if (segments < 1 || ell.points.size() < 2) return std::nullopt;
+  auto index = [&](int j) { return L.closed ? ((j % n) + n) % n : j; };
+  // The curve vertex nearest to l's start: a full scan first, then a window ahead of the previous one.
+  const Vec3& m = ell.points.front().point();
+  int lo = 0, hi = n - 1;
+  if (hint >= 0) lo = hint - 8, hi = hint + 96;
+  if (!L.closed) lo = std::max(lo, 0), hi = std::min(hi, n - 1);
+  int nearest = -1;
+  double best = std::numeric_limits<double>::infinity();
+  for (int j = lo; j <= hi; ++j) {
+    const double d = (L.curve[index(j)].point() - m).squaredNorm();
+    if (d < best) best = d, nearest = j;
+  }
+  if (nearest < 0) return std::nullopt;
+  hint = index(nearest);
+  std::optional<Crossing> first;
+  for (int j = nearest - 24; j <= nearest + 24; ++j) {
+    if (!L.closed && (j < 0 || j + 1 >= n)) continue;
+    const int j0 = index(j), j1 = index(j + 1);
+    const Vec2 p = toTangentPlane(g, L.curve[j0].point()), r = toTangentPlane(g, L.curve[j1].point()) - p;
+    for (std::size_t k = 0; k + 1 < ell.points.size(); ++k) {
+      const Vec2 q = toTangentPlane(g, ell.points[k].point()), s = toTangentPlane(g, ell.points[k + 1].point()) - q;
+      const double den = cross2(r, s);
+      if (std::abs(den) < 1e-300) continue;
+      const double t = cross2(q - p, s) / den, u = cross2(q - p, r) / den;
+      if (t < 0 || t > 1 || u < 0 || u > 1) continue;
+      const double arc = ellArc[k] + u * (ellArc[k + 1] - ellArc[k]);
+      if (first && first->ellArc <= arc) continue;
+      const double segmentLength = (L.curve[j1].point() - L.curve[j0].point()).norm();
+      const double curveArc = (j0 + 1 < n ? L.curveArc[j0] : L.curveArc.back()) + t * segmentLength;
+      first = Crossing{arc, (1 - u) * ell.points[k].point() + u * ell.points[k + 1].point(), curveArc};
+    }
+  }
+  return first;
+}
+
+// Method 2 (§5.2, Fig. 16): apexes on the flow lines l_i of D_G through the midpoints; the next base curve is
+// the D_F flow line fitting the ideal apexes (least squares over its start on the middle l), raised until its
+// crossings with every l_i lie above DE (so every star is valid); crossings still below DE are dropped.
+std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, const std::vector<Segment>& segments,
+                                                            Row& next, bool recordConjugateLines) {
+  const int n = static_cast<int>(segments.size());
+  std::vector<FlowLine> ells(n);
+  std::vector<std::vector<double>> ellArcs(n);
+  std::vector<std::optional<Apex>> apexes(n);
+  int middle = -1;
+  for (int i = 0; i < n; ++i) {
+    const Segment& s = segments[i];
+    const std::optional<Vec3> d = s.asymptotic ? std::nullopt : field_.direction(s.M, G_, &s.left);
+    const Vec3 ab = vertices_[row.ids[(i + 1) % row.ids.size()]].point() - vertices_[row.ids[i]].point();
+    if (s.asymptotic || (d && d->cross(ab.normalized()).norm() < kMinConjugateSine))
+      cannotTile(s.M, kAsymptoticBase);
+    if (!d) continue;  // a singularity of D_G: no apex here
+    ells[i] = traceFlowLine(field_, G_, s.M, *d, kEllLength * s.step, false);
+    ellArcs[i] = cumulativeArc(ells[i].points);
+    if (ells[i].length > s.step && (middle < 0 || std::abs(i - n / 2) < std::abs(middle - n / 2))) middle = i;
+    if (recordConjugateLines) {
+      std::vector<Vec3> line;
+      for (const SurfacePoint& p : ells[i].points) line.push_back(p.point());
+      fieldLines_.push_back(line);
+    }
+  }
+  if (middle < 0) return apexes;
+
+  const Vec3 rowDirection =
+      vertices_[row.ids[(middle + 1) % row.ids.size()]].point() - vertices_[row.ids[middle]].point();
+  const double rowAhead = row.closed ? row.curveLength : row.sampleArc.back() - row.sampleArc[middle];
+  const double rowBehind = row.closed ? 0.0 : row.sampleArc[middle] - row.sampleArc.front();
+  std::vector<std::optional<Crossing>> crossings(n);
+  double s0 = segments[middle].step;
+  for (int iteration = 0; iteration < 6; ++iteration) {
+    s0 = std::min(s0, ells[middle].length);
+    const SurfacePoint start = pointAtArc(walker_, ells[middle].points, ellArcs[middle], false, ells[middle].length, s0);
+    const FlowLine forward = traceFlowLine(field_, F_, start, rowDirection, 1.5 * rowAhead + 4 * o_.cell, row.closed);
+    next = Row{};
+    if (forward.end == FlowLine::End::Closed) {
+      next.closed = true;
+      next.curve = forward.points;
+    } else {
+      const FlowLine backward = traceFlowLine(field_, F_, start, -rowDirection, 1.5 * rowBehind + 4 * o_.cell, false);
+      next.curve.assign(backward.points.rbegin(), backward.points.rend());
+      next.curve.insert(next.curve.end(), forward.points.begin() + 1, forward.points.end());
+    }
+    next.curveArc = cumulativeArc(next.curve);
+    next.curveLength = next.closed ? forward.length : next.curveArc.back();
+    int hint = -1;
+    double fit = 0, norm = 0, raise = 1;
+    for (int i = 0; i < n; ++i) {
+      crossings[i] = ells[i].points.size() > 1 ? crossCurve(segments[i].M.g, ells[i], ellArcs[i], next, hint)
+                                               : std::nullopt;
+      if (!crossings[i]) continue;
+      const double t = crossings[i]->ellArc;
+      fit += segments[i].step * t;
+      norm += t * t;
+      if (t > 0) raise = std::max(raise, kValidMargin * segments[i].validStep / t);
+    }
+    if (norm <= 0 || iteration == 5) break;
+    // Crossings move about in proportion to the start's distance s0 from the base: the least-squares scale of
+    // s0 towards the ideal steps first, then the raise that lifts every crossing above DE.
+    const double scale = iteration == 0 ? fit / norm : raise;
+    if (std::abs(scale - 1) < 1e-3) break;
+    s0 *= scale;
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!crossings[i]) continue;
+    const Segment& s = segments[i];
+    if (!(crossings[i]->ellArc > s.validStep)) {
+      if (!invalidDrops_++) firstInvalidDrop_ = describe(walker_, s.M);
+      continue;
+    }
+    const SurfacePoint p = walker_.project(crossings[i]->point, s.M);
+    if (walker_.isOutside(crossings[i]->point, p)) continue;
+    apexes[i] = Apex{p, crossings[i]->ellArc / s.base, crossings[i]->curveArc};
+  }
+  return apexes;
+}
+
+// Adds a vertex before the first (or after the last) of an open row, so that rows keep reaching the boundary
+// instead of shrinking by one segment per layer: further along the row's curve where it goes on (Method 2's
+// flow line), else by extrapolating the row (Method 1). Returns false when that point is outside or taken.
+bool Laying::extendRow(Row& row, bool atStart) {
+  const int n = static_cast<int>(row.ids.size());
+  if (row.closed || n < 2) return false;
+  const int end = atStart ? 0 : n - 1, inner = atStart ? 1 : n - 2;
+  const SurfacePoint& e = vertices_[row.ids[end]];
+  const double spacing = std::abs(row.sampleArc[end] - row.sampleArc[inner]);
+  const double t = row.sampleArc[end] + (atStart ? -spacing : spacing);
+  SurfacePoint p;
+  if (t >= 0 && t <= row.curveLength && o_.method == LayingMethod::Prespecified) {
+    p = pointAtArc(walker_, row.curve, row.curveArc, false, row.curveLength, t);
+  } else if (o_.method == LayingMethod::Progressive) {
+    const Vec3 x = 2 * e.point() - vertices_[row.ids[inner]].point();
+    p = walker_.project(x, e);
+    if (walker_.isOutside(x, p)) return false;
+  } else {
+    return false;
+  }
+  if (collides(p.point(), 0.5 * spacing)) return false;
+  const int id = addVertex(p, vertexRatio_[row.ids[end]]);
+  inBase_[id] = 1;
+  if (atStart) {
+    row.ids.insert(row.ids.begin(), id);
+    row.sampleArc.insert(row.sampleArc.begin(), t);
+  } else {
+    row.ids.push_back(id);
+    row.sampleArc.push_back(t);
+  }
+  if (o_.method == LayingMethod::Progressive) setOwnCurve(row);
+  return true;
+}
+
+// Triangles between two rows running the same way, Q to the left of P: each step advances along P (triangle
+// P_i P_i+1 Q_j) or along Q (triangle P_i Q_j+1 Q_j), whichever makes the shorter diagonal. Two loops of equal
+// count alternate strictly, which gives every vertex three triangles on each side: valence 6 is kept.
+void Laying::zip(std::vector<int> P, bool closedP, std::vector<int> Q, bool closedQ) {
+  auto at = [&](int id) -> const Vec3& { return vertices_[id].point(); };
+  auto nearestTo = [&](const std::vector<int>& row, const Vec3& x) {
+    int best = 0;
+    for (int k = 1; k < static_cast<int>(row.size()); ++k)
+      if ((at(row[k]) - x).squaredNorm() < (at(row[best]) - x).squaredNorm()) best = k;
+    return best;
+  };
+  if (P.size() < 2 || Q.size() < 2) return;
+  if (closedP && closedQ) {
+    const int n = static_cast<int>(P.size()), m = static_cast<int>(Q.size());
+    std::rotate(Q.begin(), Q.begin() + nearestTo(Q, 0.5 * (at(P[0]) + at(P[1]))), Q.end());
+    bool advanceP = (at(P[1]) - at(Q[0])).norm() <= (at(P[0]) - at(Q[1 % m])).norm();
+    for (int i = 0, j = 0; i < n || j < m;) {
+      if (i == n) advanceP = false;
+      else if (j == m) advanceP = true;
+      else if (n != m) advanceP = (at(P[(i + 1) % n]) - at(Q[j % m])).norm() <= (at(P[i % n]) - at(Q[(j + 1) % m])).norm();
+      if (advanceP) triangles_.emplace_back(P[i % n], P[(i + 1) % n], Q[j % m]), ++i;
+      else triangles_.emplace_back(P[i % n], Q[(j + 1) % m], Q[j % m]), ++j;
+      advanceP = !advanceP;
+    }
+    return;
+  }
+  // Open rows (a loop facing an open row is unrolled at the point nearest the other's start).
+  if (closedP) std::rotate(P.begin(), P.begin() + nearestTo(P, at(Q[0])), P.end()), P.push_back(P[0]);
+  if (closedQ) std::rotate(Q.begin(), Q.begin() + nearestTo(Q, at(P[0])), Q.end()), Q.push_back(Q[0]);
+  const int n = static_cast<int>(P.size()), m = static_cast<int>(Q.size());
+  const int j0 = nearestTo(Q, at(P[0]));
+  int i = j0 > 0 ? 0 : nearestTo(P, at(Q[0])), j = j0;
+  const double limit = 2.5 * o_.cell;  // past the end of the shorter row the fan stops where the rows part
+  while (i + 1 < n || j + 1 < m) {
+    const double dP = i + 1 < n ? (at(P[i + 1]) - at(Q[j])).norm() : std::numeric_limits<double>::infinity();
+    const double dQ = j + 1 < m ? (at(P[i]) - at(Q[j + 1])).norm() : std::numeric_limits<double>::infinity();
+    if (std::min(dP, dQ) > limit) break;
+    if (dP <= dQ) triangles_.emplace_back(P[i], P[i + 1], Q[j]), ++i;
+    else triangles_.emplace_back(P[i], Q[j + 1], Q[j]), ++j;
+  }
+}
+
+// True when b's row lies just ahead of a's (to its left), closer than kZipGap steps along most of a.
+bool Laying::facing(const Front& a, const Front& b) const {
+  const std::vector<int>& P = a.row.ids;
+  const std::vector<int>& Q = b.row.ids;
+  if (P.size() < 2 || Q.size() < 2) return false;
+  const double gap = kZipGap * std::max({a.lastStep, b.lastStep, 0.25 * o_.cell});
+  Box3 boxP, boxQ;
+  for (int id : P) boxP.extend(vertices_[id].point());
+  for (int id : Q) boxQ.extend(vertices_[id].point());
+  const Vec3 pad = Vec3::Constant(gap);
+  if (!Box3(boxP.min() - pad, boxP.max() + pad).intersects(boxQ)) return false;
+  const int n = static_cast<int>(P.size()), stride = std::max(1, n / 48);
+  int samples = 0, near = 0;
+  for (int k = 0; k < n; k += stride) {
+    ++samples;
+    const SurfacePoint& p = vertices_[P[k]];
+    const Vec3 tangent = vertices_[P[std::min(k + 1, n - 1)]].point() - vertices_[P[std::max(k - 1, 0)]].point();
+    const Vec3 left = p.g.normal.cross(tangent).normalized();
+    double best = std::numeric_limits<double>::infinity();
+    Vec3 offset = Vec3::Zero();
+    for (int id : Q) {
+      const double d = (vertices_[id].point() - p.point()).norm();
+      if (d < best) best = d, offset = vertices_[id].point() - p.point();
+    }
+    near += best < gap && offset.dot(left) > 0.2 * best;
+  }
+  return 2 * near >= samples;
+}
+
+bool Laying::zipIfMeeting(std::size_t f) {
+  for (std::size_t k = 0; k < fronts_.size(); ++k) {
+    if (k == f || !fronts_[k].active || !facing(fronts_[f], fronts_[k])) continue;
+    const Row& a = fronts_[f].row;
+    Row b = reversed(fronts_[k].row);
+    zip(a.ids, a.closed, b.ids, b.closed);
+    std::ostringstream note;
+    note << "two fronts met near " << describe(walker_, vertices_[a.ids[a.ids.size() / 2]]) << " and were zipped ("
+         << a.ids.size() << " and " << b.ids.size() << " vertices"
+         << (a.ids.size() == b.ids.size() && a.closed && b.closed ? ", valence 6 kept"
+                                                                   : ", irregular vertices where the counts differ")
+         << ")";
+    zipNotes_.push_back(note.str());
+    fronts_[f].active = fronts_[k].active = false;
+    return true;
+  }
+  return false;
+}
+
+void Laying::layLayer(std::size_t f) {
+  Row A = fronts_[f].row;
+  for (int id : A.ids) inBase_[id] = 1;
+  for (int k = 0; k < 2; ++k) {
+    extendRow(A, true);
+    extendRow(A, false);
+  }
+  const int count = static_cast<int>(A.ids.size());
+  const int n = A.closed ? count : count - 1;
+  std::vector<Segment> segments;
+  for (int i = 0; i < n; ++i) {
+    segments.push_back(segment(A, i));
+    if (!segments.back().asymptotic) continue;
+    // From L0 this is the field's doing: fail. Later, Method 1's rows have turned there (§5.2: their
+    // orientation is not controlled): that front stops there.
+    if (fronts_[f].layers == 0)
+      cannotTile(segments.back().M, kAsymptoticBase);
+    if (!asymptoticStops_++) firstAsymptoticStop_ = describe(walker_, segments.back().M);
+  }
+  Row next;
+  std::vector<std::optional<Apex>> apexes = o_.method == LayingMethod::Progressive
+                                                ? progressiveApexes(A, segments)
+                                                : prespecifiedApexes(A, segments, next, layers_ < 2);
+  for (int i = 0; i < n; ++i)
+    if (apexes[i] && collides(apexes[i]->p.point(), 0.5 * std::min(segments[i].step, segments[i].base))) {
+      apexes[i].reset();
+      ++collisions_;
+    }
+  for (int id : A.ids) inBase_[id] = 0;
+
+  bool bounded = false, reused = false;
+  for (const Segment& s : segments) {
+    bounded = bounded || s.bounded;
+    reused = reused || s.reused;
+    boundedSegments_ += s.bounded;
+    reusedSegments_ += s.reused;
+    if (s.reused && firstReuse_.empty()) firstReuse_ = describe(walker_, s.M);
+  }
+  boundedLayers_ += bounded;
+  reusedLayers_ += reused;
+  ++layers_;
+
+  // Runs of consecutive apexes; each run of two or more becomes the row of a front.
+  std::vector<std::pair<int, int>> runs;  // first segment, number of segments
+  const bool complete = std::all_of(apexes.begin(), apexes.end(), [](const auto& a) { return a.has_value(); });
+  if (A.closed && complete) {
+    runs.emplace_back(0, n);
+  } else {
+    int begin = 0;
+    if (A.closed) while (apexes[begin]) ++begin;  // start after a gap so no run wraps in two pieces
+    for (int k = 0; k < n;) {
+      const int i = (begin + k) % n;
+      if (!apexes[i]) {
+        ++k;
+        continue;
+      }
+      int length = 0;
+      while (k + length < n && apexes[(begin + k + length) % n]) ++length;
+      runs.emplace_back(i, length);
+      k += length;
+    }
+  }
+  std::vector<Front> produced;
+  for (const auto& [first, length] : runs) {
+    if (length < 2) continue;
+    const bool closedRun = A.closed && length == n;
+    Front front;
+    Row& C = front.row;
+    C.closed = closedRun;
+    std::vector<Apex> run;
+    double step = 0;
+    for (int k = 0; k < length; ++k) {
+      run.push_back(*apexes[(first + k) % n]);
+      step += segments[(first + k) % n].step;
+    }
+    front.lastStep = step / length;
+    // The row's curve: Method 2's fitted flow line, or Method 1's apex polyline.
+    if (o_.method == LayingMethod::Prespecified) {
+      C.curve = next.curve;
+      C.curveArc = next.curveArc;
+      C.curveLength = next.curveLength;
+      for (const Apex& a : run) C.sampleArc.push_back(a.arc);
+      if (!closedRun) {  // arcs increase along an open row; a run may straddle the start of a closed curve
+        for (std::size_t k = 1; k < C.sampleArc.size(); ++k)
+          if (C.sampleArc[k] < C.sampleArc[k - 1]) C.sampleArc[k] += C.curveLength;
+        if (next.closed) C.closed = false, C.curveLength = 0;  // unrolled below when resampled
+      }
+    } else {
+      for (const Apex& a : run) C.curve.push_back(a.p);
+      C.curveArc = cumulativeArc(C.curve);
+      C.curveLength = C.curveArc.back() + (closedRun ? (C.curve.back().point() - C.curve.front().point()).norm() : 0.0);
+      C.sampleArc = C.curveArc;
+    }
+    double spacing = 0;
+    for (int k = 0; k + 1 < length; ++k) spacing += (run[k + 1].p.point() - run[k].p.point()).norm();
+    if (closedRun) spacing += (run.front().p.point() - run.back().p.point()).norm();
+    spacing /= closedRun ? length : length - 1;
+    std::vector<int> below;  // the base vertices under the run
+    for (int k = 0; k <= (closedRun ? length - 1 : length); ++k) below.push_back(A.ids[(first + k) % count]);
+
+    const bool curveUsable = C.curveLength > 0 || o_.method == LayingMethod::Progressive;
+    if (curveUsable && (spacing < kResampleBelow * o_.cell || spacing > kResampleAbove * o_.cell)) {
+      // The row's spacing drifted far from the cell: re-sample it evenly along its curve, zip it to the base.
+      double ratio = 0;
+      for (const Apex& a : run) ratio += a.ratio / length;
+      const double span = closedRun ? C.curveLength : C.sampleArc.back() - C.sampleArc.front();
+      const int m = closedRun ? std::max(3, static_cast<int>(std::lround(span / o_.cell)))
+                              : std::max(2, static_cast<int>(std::lround(span / o_.cell)) + 1);
+      std::vector<double> arcs;
+      for (int k = 0; k < m; ++k) arcs.push_back(C.sampleArc.front() + span * k / (closedRun ? m : m - 1));
+      for (double t : arcs)
+        C.ids.push_back(
+            addVertex(pointAtArc(walker_, C.curve, C.curveArc, C.closed, C.curveLength, t), ratio));
+      C.sampleArc = arcs;
+      zip(below, closedRun, C.ids, closedRun);
+      if (!resampled_++) {
+        std::ostringstream where;
+        where << describe(walker_, vertices_[C.ids[C.ids.size() / 2]]) << " (spacing " << spacing / o_.cell
+              << " cell, " << length << " -> " << m << " vertices)";
+        firstResample_ = where.str();
+      }
+    } else {
+      for (const Apex& a : run) C.ids.push_back(addVertex(a.p, a.ratio));
+      for (int k = 0; k < length; ++k) {
+        const int i = (first + k) % n;
+        triangles_.emplace_back(A.ids[i], A.ids[(i + 1) % count], C.ids[k]);
+        if (k + 1 < length || closedRun)
+          triangles_.emplace_back(A.ids[(i + 1) % count], C.ids[(k + 1) % length], C.ids[k]);
+      }
+    }
+    if (o_.method == LayingMethod::Progressive) setOwnCurve(C);
+    if (o_.method == LayingMethod::Prespecified && layers_ <= 4 * static_cast<int>(fronts_.size())) {
+      std::vector<Vec3> line;
+      for (const SurfacePoint& p : C.curve) line.push_back(p.point());
+      fieldLines_.push_back(line);
+    }
+    produced.push_back(std::move(front));
+  }
+  if (produced.empty()) {
+    fronts_[f].active = false;
+    ++boundaryStops_;
+    return;
+  }
+  for (Front& p : produced) p.layers = fronts_[f].layers + 1;
+  splits_ += static_cast<int>(produced.size()) - 1;
+  fronts_[f] = std::move(produced.front());
+  for (std::size_t k = 1; k < produced.size(); ++k) fronts_.push_back(std::move(produced[k]));
+}
+
+Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
+  Row L0 = baseCurve(start, initial);
+  fronts_.push_back(Front{L0, true, kEquilateralRatio * o_.cell});
+  fronts_.push_back(Front{reversed(L0), true, kEquilateralRatio * o_.cell});
+  const double area = std::max(walker_.surface().bounds().diagonal().squaredNorm(), o_.cell * o_.cell);
+  while (layers_ < o_.maxLayers) {
+    bool any = false;
+    for (std::size_t f = 0; f < fronts_.size() && layers_ < o_.maxLayers; ++f) {
+      if (!fronts_[f].active) continue;
+      checkCancel(cancel_);
+      any = true;
+      if (!zipIfMeeting(f)) layLayer(f);
+    }
+    if (!any) break;
+    if (progress_) {
+      const double expected = area / (kEquilateralRatio * o_.cell * o_.cell);
+      progress_({"triangulate", std::min(0.95, vertices_.size() / expected),
+                 "layer " + std::to_string(layers_) + ", " + std::to_string(vertices_.size()) + " vertices"});
+    }
+  }
+  if (triangles_.empty())
+    cannotTile(start, "no layer of triangles could be laid from the base curve (every apex fell outside the "
+                      "surface); choose a smaller cell or another start");
+
+  // Vertices in no triangle (row extensions whose apexes fell outside) are left out.
+  Triangulation t;
+  std::vector<int> index(vertices_.size(), -1);
+  for (const Eigen::Vector3i& tri : triangles_)
+    for (int c = 0; c < 3; ++c) index[tri(c)] = 0;
+  int nv = 0;
+  for (int& i : index)
+    if (i == 0) i = nv++;
+  t.mesh.V.resize(nv, 3);
+  for (std::size_t v = 0; v < vertices_.size(); ++v) {
+    if (index[v] < 0) continue;
+    t.mesh.V.row(index[v]) = vertices_[v].point().transpose();
+    if (walker_.parametric()) t.uv.push_back(vertices_[v].uv);
+  }
+  t.mesh.F.resize(static_cast<int>(triangles_.size()), 3);
+  for (int k = 0; k < static_cast<int>(triangles_.size()); ++k)
+    for (int c = 0; c < 3; ++c) t.mesh.F(k, c) = index[triangles_[k](c)];
+  t.fieldLines = std::move(fieldLines_);
+
+  std::ostringstream s;
+  s << layingMethodName(o_.method) << " conjugation, field " << fieldSpecName(field_.spec()) << ", base curves along "
+    << (F_ == Family::First ? "the field" : "its conjugate") << ": L0 " << (L0.closed ? "closed, " : "open, ")
+    << L0.ids.size() << " samples through " << describe(walker_, start) << "; " << layers_ << " layers";
+  t.notes.push_back(s.str());
+  auto note = [&](bool when, const std::string& text) {
+    if (when) t.notes.push_back(text);
+  };
+  note(boundedLayers_ > 0, "§5.3 lower bound b = " + std::to_string(o_.lowerBound) + " active on " +
+                               std::to_string(boundedLayers_) + " layers (" + std::to_string(boundedSegments_) +
+                               " triangles)");
+  note(reusedSegments_ > 0, "§5.3 step re-used from the previous layer across a parabolic curve on " +
+                                std::to_string(reusedLayers_) + " layers (" + std::to_string(reusedSegments_) +
+                                " triangles), first near " + firstReuse_);
+  note(resampled_ > 0, "rows resampled " + std::to_string(resampled_) +
+                           " times where their spacing drifted from the cell, first near " + firstResample_);
+  note(boundaryStops_ > 0, std::to_string(boundaryStops_) + " fronts stopped at the boundary");
+  note(splits_ > 0, std::to_string(splits_) + " rows split where apexes fell outside or collided");
+  note(collisions_ > 0, std::to_string(collisions_) + " apexes dropped where they would overlap laid triangles");
+  note(invalidDrops_ > 0, "Method 2: " + std::to_string(invalidDrops_) +
+                              " apexes dropped where the D_F flow line could not be kept above DE (the star would "
+                              "be invalid), first near " + firstInvalidDrop_ + "; laying stopped there");
+  note(asymptoticStops_ > 0, "Method 1 rows turned onto an asymptotic direction (no valid triangle there) on " +
+                                 std::to_string(asymptoticStops_) + " segments, first near " + firstAsymptoticStop_ +
+                                 "; those fronts stopped there (the prespecified method keeps rows on the field)");
+  note(layers_ >= o_.maxLayers, "stopped at maxLayers = " + std::to_string(o_.maxLayers));
+  for (const std::string& z : zipNotes_) t.notes.push_back(z);
+  return t;
+}
+
+}  // namespace
+
+double stepLowerBound(double r, double b) {
+  if (!(b > 0) || r >= 2 * b) return r;
+  return b + r * r / (4 * b);
+}
+
+LayingMethod parseLayingMethod(const std::string& name) {
+  if (name == "progressive") return LayingMethod::Progressive;
+  if (name == "prespecified") return LayingMethod::Prespecified;
+  throw Error(ErrorCode::InvalidParameter,
+              "unknown laying method '" + name + "' (known: progressive, prespecified)");
+}
+
+const char* layingMethodName(LayingMethod method) {
+  return method == LayingMethod::Progressive ? "progressive" : "prespecified";
+}
+
+Triangulation layTriangulation(const Surface& surface, const LayingOptions& options, const ProgressFn& progress,
+                               const CancelFlag* cancel) {
+  auto invalid = [](const std::string& name, double value, const std::string& range) {
+    std::ostringstream msg;
+    msg << "laying option " << name << " = " << value << " is out of range (" << range << ")";
+    throw Error(ErrorCode::InvalidParameter, msg.str());
+  };
+  if (!(options.cell > 0) || !std::isfinite(options.cell)) invalid("cell", options.cell, "must be > 0");
+  if (!(options.lowerBound >= 0 && options.lowerBound <= 2)) invalid("lowerBound", options.lowerBound, "[0, 2]");
+  if (!(options.maxStepRatio >= 1 && options.maxStepRatio <= 100))
+    invalid("maxStepRatio", options.maxStepRatio, "[1, 100]");
+  if (options.maxLayers < 1) invalid("maxLayers", options.maxLayers, ">= 1");
+  if (options.maxVertices < 3) invalid("maxVertices", options.maxVertices, ">= 3");
+  if (options.start && !options.start->allFinite()) throw Error(ErrorCode::InvalidParameter, "laying option start is not finite");
+  if (options.baseDirection && !(options.baseDirection->allFinite() && options.baseDirection->norm() > 0))
+    throw Error(ErrorCode::InvalidParameter, "laying option baseDirection must be a finite non-zero vector");
+
+  const SurfaceWalker walker(surface, options.cell);
+  const DirectionField field(walker, parseFieldSpec(options.field));
+  const SurfacePoint start = walker.project(options.start.value_or(surface.bounds().center()));
+  const LocalGeometry& g = start.g;
+
+  // The family of the base curves and its direction at the start.
+  Vec3 hint = options.baseDirection.value_or(std::abs(g.normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY());
+  hint -= hint.dot(g.normal) * g.normal;
+  const std::optional<Vec3> dF = field.direction(start, Family::First, &hint);
+  const std::optional<Vec3> dG = field.direction(start, Family::Conjugate, &hint);
+  if (!dF && !dG)
+    throw Error(ErrorCode::CannotTile, "direction field '" + options.field + "' is singular at the start point " +
+                                           describe(walker, start) + "; choose another start point or field");
+  auto normalCurvature = [&](const Vec3& d) {
+    return std::abs(g.k1 * std::pow(d.dot(g.d1), 2) + g.k2 * std::pow(d.dot(g.d2), 2));
+  };
+  Family family;
+  if (!dF || !dG) {
+    family = dF ? Family::First : Family::Conjugate;
+  } else if (options.baseDirection) {
+    family = std::abs(dF->dot(hint)) >= std::abs(dG->dot(hint)) ? Family::First : Family::Conjugate;
+  } else if (options.base == BaseFamily::Auto) {
+    family = normalCurvature(*dF) <= normalCurvature(*dG) ? Family::First : Family::Conjugate;
+  } else {
+    family = options.base == BaseFamily::First ? Family::First : Family::Conjugate;
+  }
+  const Vec3 initial = family == Family::First ? *dF : *dG;
+
+  Laying laying(walker, field, options, family, progress, cancel);
+  Triangulation t = laying.run(start, initial);
+  if (progress) progress({"triangulate", 1.0, std::to_string(t.mesh.F.rows()) + " triangles laid"});
+  return t;
+}
+
+}  // namespace phex

@@ -1,0 +1,261 @@
+// phex web app — the three.js view: polygon meshes coloured per face, triangulations with field lines,
+// the surface coloured by curvature; picking a face under the pointer.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { triangulateFaces } from 'phex';
+
+export const BACKGROUND = 0xeef1f5;
+const EDGE_COLOR = 0x1d232b;
+const FIELD_COLOR = 0xd4148c;
+const PLAIN_COLOR = new THREE.Color(0xb9c6d6);
+
+export class Viewer {
+  #renderer;
+  #scene = new THREE.Scene();
+  #camera = new THREE.PerspectiveCamera(40, 1, 0.001, 1000);
+  #controls;
+  #group = new THREE.Group();
+  #faces = null; // the picked object: {mesh, faceOfTriangle, flatNormals, smoothNormals}
+  #edges = null;
+  #raycaster = new THREE.Raycaster();
+  #framed = false;
+  #pending = 0;
+  onRender = null;
+
+  constructor(container) {
+    this.container = container;
+    this.#renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    this.#renderer.setPixelRatio(window.devicePixelRatio);
+    this.#renderer.setClearColor(BACKGROUND);
+    container.append(this.#renderer.domElement);
+    this.#camera.up.set(0, 0, 1); // the surfaces are modelled with z up
+    this.#scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8f99, 1.6));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.4);
+    sun.position.set(1, 2, 3);
+    this.#camera.add(sun); // a light that follows the camera keeps every side readable
+    this.#scene.add(this.#camera, this.#group);
+    this.#controls = new OrbitControls(this.#camera, this.#renderer.domElement);
+    this.#controls.addEventListener('change', () => this.requestRender());
+    new ResizeObserver(() => this.resize()).observe(container);
+  }
+
+  get canvas() {
+    return this.#renderer.domElement;
+  }
+
+  resize() {
+    const { clientWidth: w, clientHeight: h } = this.container;
+    if (w === 0 || h === 0) return;
+    this.#renderer.setSize(w, h);
+    this.#camera.aspect = w / h;
+    this.#camera.updateProjectionMatrix();
+    this.render();
+  }
+
+  render() {
+    cancelAnimationFrame(this.#pending);
+    this.#pending = 0;
+    this.#renderer.render(this.#scene, this.#camera);
+    this.onRender?.();
+  }
+
+  /** Renders at the next frame (many changes, one render). */
+  requestRender() {
+    if (!this.#pending) this.#pending = requestAnimationFrame(() => this.render());
+  }
+
+  clear() {
+    for (const child of [...this.#group.children]) {
+      child.geometry.dispose();
+      child.material.dispose();
+      this.#group.remove(child);
+    }
+    this.#faces = null;
+    this.#edges = null;
+  }
+
+  /**
+   * Shows a polygon mesh with one colour per face (`faceColor(f, color)` sets it) and its polygon edges.
+   * Vertices are duplicated per triangle so faces keep their own colours; the smooth normals come from
+   * the shared vertices.
+   */
+  showPolygons(mesh, faceColor, { flat, wireframe }) {
+    const { positions, index, faceOfTriangle } = triangulateFaces(mesh);
+    const shared = new THREE.BufferGeometry();
+    shared.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+    shared.setIndex(new THREE.BufferAttribute(index, 1));
+    shared.computeVertexNormals();
+    const sharedNormals = shared.getAttribute('normal').array;
+    shared.dispose();
+
+    const n = faceOfTriangle.length;
+    const position = new Float32Array(n * 9);
+    const smoothNormals = new Float32Array(n * 9);
+    for (let k = 0; k < 3 * n; k++) {
+      const v = index[k];
+      position.set(positions.subarray(3 * v, 3 * v + 3), 3 * k);
+      smoothNormals.set(sharedNormals.subarray(3 * v, 3 * v + 3), 3 * k);
+    }
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(position, 3));
+    geometry.setAttribute('color', new THREE.BufferAttribute(new Float32Array(n * 9), 3));
+    geometry.computeVertexNormals(); // non-indexed: the flat normal of each triangle
+    const flatNormals = geometry.getAttribute('normal').array.slice();
+    const object = new THREE.Mesh(geometry, surfaceMaterial());
+    this.#faces = { mesh: object, faceOfTriangle, flatNormals, smoothNormals };
+    this.#edges = edgeLines(mesh.positions, polygonEdges(mesh));
+    this.#group.add(object, this.#edges);
+    this.recolor(faceColor);
+    this.setShading({ flat, wireframe });
+  }
+
+  /** Sets every face's colour again (after a colour-mode change) without rebuilding the geometry. */
+  recolor(faceColor) {
+    if (!this.#faces) return;
+    const { mesh, faceOfTriangle } = this.#faces;
+    const attribute = mesh.geometry.getAttribute('color');
+    const color = new THREE.Color();
+    for (let t = 0; t < faceOfTriangle.length; t++) {
+      faceColor(faceOfTriangle[t], color);
+      for (let k = 0; k < 3; k++) attribute.setXYZ(3 * t + k, color.r, color.g, color.b);
+    }
+    attribute.needsUpdate = true;
+    this.requestRender();
+  }
+
+  /** A triangle mesh with per-vertex colours (or plain), its edges and optional polylines. */
+  showTriangles({ positions, triangles, fieldLines }, vertexColor, { flat, wireframe }) {
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(Float32Array.from(positions), 3));
+    geometry.setIndex(new THREE.BufferAttribute(triangles, 1));
+    const colors = new Float32Array(positions.length);
+    const color = new THREE.Color();
+    for (let v = 0; v < positions.length / 3; v++) {
+      if (vertexColor) vertexColor(v, color);
+      else color.copy(PLAIN_COLOR);
+      colors.set([color.r, color.g, color.b], 3 * v);
+    }
+    geometry.setAttribute('color', new THREE.BufferAttribute(colors, 3));
+    geometry.computeVertexNormals();
+    const object = new THREE.Mesh(geometry, surfaceMaterial());
+    object.material.flatShading = flat;
+    this.#group.add(object);
+    if (wireframe) {
+      const edges = [];
+      for (let t = 0; t < triangles.length; t += 3) {
+        for (let k = 0; k < 3; k++) edges.push(triangles[t + k], triangles[t + ((k + 1) % 3)]);
+      }
+      this.#edges = edgeLines(positions, uniqueEdges(edges));
+      this.#group.add(this.#edges);
+    }
+    if (fieldLines) this.#group.add(polylineObject(fieldLines));
+    this.requestRender();
+  }
+
+  setShading({ flat, wireframe }) {
+    if (this.#faces) {
+      const normal = this.#faces.mesh.geometry.getAttribute('normal');
+      normal.array.set(flat ? this.#faces.flatNormals : this.#faces.smoothNormals);
+      normal.needsUpdate = true;
+    }
+    if (this.#edges) this.#edges.visible = wireframe;
+    this.requestRender();
+  }
+
+  /** Frames what is shown (the bounding sphere of the vertices: tighter than the box's for a flat torus). */
+  fitToView() {
+    const box = new THREE.Box3().setFromObject(this.#group);
+    if (box.isEmpty()) return;
+    const sphere = box.getBoundingSphere(new THREE.Sphere());
+    const first = this.#group.children[0]?.geometry;
+    if (first) {
+      first.computeBoundingSphere();
+      sphere.copy(first.boundingSphere);
+    }
+    const camera = this.#camera;
+    const fov = THREE.MathUtils.degToRad(camera.fov);
+    const distance = (sphere.radius / Math.sin(Math.min(fov, fov * camera.aspect) / 2)) * 1.05;
+    const direction = this.#framed ? camera.position.clone().sub(this.#controls.target).normalize() : new THREE.Vector3(1, -1.3, 0.9).normalize();
+    camera.position.copy(sphere.center).addScaledVector(direction, distance);
+    camera.near = distance / 100;
+    camera.far = distance * 10;
+    camera.updateProjectionMatrix();
+    this.#controls.target.copy(sphere.center);
+    this.#controls.update();
+    this.#framed = true;
+    this.requestRender();
+  }
+
+  /** The face of the shown polygon mesh under the client point, or -1. */
+  pick(clientX, clientY) {
+    if (!this.#faces) return -1;
+    const rect = this.canvas.getBoundingClientRect();
+    const pointer = new THREE.Vector2(((clientX - rect.left) / rect.width) * 2 - 1, -((clientY - rect.top) / rect.height) * 2 + 1);
+    this.#raycaster.setFromCamera(pointer, this.#camera);
+    const [hit] = this.#raycaster.intersectObject(this.#faces.mesh, false);
+    return hit ? this.#faces.faceOfTriangle[hit.faceIndex] : -1;
+  }
+
+  /** The object to export as glTF. */
+  exportable() {
+    return this.#group;
+  }
+
+  /** A PNG of the current view, as a data URL. */
+  snapshot() {
+    this.render();
+    return this.canvas.toDataURL('image/png');
+  }
+}
+
+function surfaceMaterial() {
+  return new THREE.MeshLambertMaterial({
+    vertexColors: true,
+    side: THREE.DoubleSide,
+    // Push faces back a little so the edges drawn on them are never hidden.
+    polygonOffset: true,
+    polygonOffsetFactor: 1,
+    polygonOffsetUnits: 1,
+  });
+}
+
+/** The polygon boundaries (not the fan triangles) as vertex pairs, each edge once. */
+function polygonEdges({ faceOffsets, faceIndices }) {
+  const pairs = [];
+  for (let f = 0; f + 1 < faceOffsets.length; f++) {
+    const first = faceOffsets[f];
+    const n = faceOffsets[f + 1] - first;
+    for (let i = 0; i < n; i++) pairs.push(faceIndices[first + i], faceIndices[first + ((i + 1) % n)]);
+  }
+  return uniqueEdges(pairs);
+}
+
+function uniqueEdges(pairs) {
+  const seen = new Set();
+  const out = [];
+  for (let i = 0; i < pairs.length; i += 2) {
+    const a = Math.min(pairs[i], pairs[i + 1]);
+    const b = Math.max(pairs[i], pairs[i + 1]);
+    const key = a * 0x100000000 + b;
+    if (seen.has(key)) continue;
+    seen.add(key);
+    out.push(a, b);
+  }
+  return out;
+}
+
+function edgeLines(positions, pairs) {
+  const position = new Float32Array(pairs.length * 3);
+  pairs.forEach((v, i) => position.set(positions.subarray(3 * v, 3 * v + 3), 3 * i));
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.BufferAttribute(position, 3));
+  return new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ color: EDGE_COLOR }));
+}
+
+function polylineObject({ positions, offsets }) {
+  const pairs = [];
+  for (let l = 0; l + 1 < offsets.length; l++) for (let p = offsets[l]; p + 1 < offsets[l + 1]; p++) pairs.push(p, p + 1);
+  const lines = edgeLines(positions, pairs);
+  lines.material.color.set(FIELD_COLOR);
+  return lines;
+}
