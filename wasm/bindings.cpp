@@ -189,6 +189,7 @@ val resultToJs(const phex::PipelineResult& r) {
   timings.set("total", r.totalMilliseconds);
   out.set("timings", timings);
   out.set("dualFallbacks", r.dual.fallbackCount);
+  out.set("method", std::string(phex::triangulationMethodName(r.method)));
   return out;
 }
 
@@ -222,6 +223,7 @@ val surfaces() {
     val e = val::object();
     e.set("name", s.name);
     e.set("description", s.description);
+    e.set("method", s.method);
     val ps = val::array();
     for (const phex::ParameterSpec& p : s.parameters) {
       val q = val::object();
@@ -247,7 +249,7 @@ val capabilities() {
   for (const char* f : {"obj", "off", "ply", "stl"}) formats.call<void>("push", std::string(f));
   c.set("meshFormats", formats);
   val methods = val::array();
-  for (const char* m : {"progressive", "prespecified", "subdivision", "lattice"}) methods.call<void>("push", std::string(m));
+  for (const char* m : {"auto", "progressive", "prespecified", "subdivision", "lattice"}) methods.call<void>("push", std::string(m));
   c.set("methods", methods);
   val fields = val::array();
   for (const char* f : {"principal", "angle:DEG", "param", "radial", "diverging", "spiral"}) fields.call<void>("push", std::string(f));

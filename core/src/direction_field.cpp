@@ -145,29 +145,35 @@ DirectionField::DirectionField(const SurfaceWalker& walker, const FieldSpec& spe
   centre_ = walker.surface().bounds().center();
 }
 
+std::optional<Vec3> DirectionField::meridian(const SurfacePoint& p) const {
+  // The section by the plane through the axis and p.
+  const Vec3 planeNormal = axis_.cross(p.point() - centre_);
+  if (!(planeNormal.norm() > 1e-9 * std::max(walker_.cell(), (p.point() - centre_).norm()))) return std::nullopt;
+  return tangentUnit(p.g, p.g.normal.cross(planeNormal));
+}
+
 std::optional<Vec3> DirectionField::first(const SurfacePoint& p) const {
   const LocalGeometry& g = p.g;
   const double rad = spec_.degrees * kPi / 180;
+  auto rotated = [&](const std::optional<Vec3>& d) -> std::optional<Vec3> {
+    if (!d) return d;
+    return Vec3(std::cos(rad) * *d + std::sin(rad) * g.normal.cross(*d));
+  };
   switch (spec_.kind) {
     case FieldKind::Principal:
     case FieldKind::Angle:
-      if (isUmbilic(g, walker_.cell())) return std::nullopt;
-      return Vec3(std::cos(rad) * g.d1 + std::sin(rad) * g.d2);
+      // At an umbilic every direction is principal; a sphere's curvature lines are then taken as its meridians
+      // and parallels about z, so that a sphere laid with "principal" gets the radial network (Fig. 20).
+      return isUmbilic(g, walker_.cell()) ? rotated(meridian(p)) : rotated(g.d1);
     case FieldKind::Param: {
       const ParametricSurface::Jet j = walker_.parametric()->jet(p.uv.x(), p.uv.y());
       return tangentUnit(g, spec_.paramV ? j.Pv : j.Pu);
     }
     case FieldKind::Radial:
     case FieldKind::Diverging:
-    case FieldKind::Spiral: {
-      // The meridian: the section by the plane through the axis and p.
-      const Vec3 planeNormal = axis_.cross(p.point() - centre_);
-      if (!(planeNormal.norm() > 1e-9 * std::max(walker_.cell(), (p.point() - centre_).norm()))) return std::nullopt;
-      const std::optional<Vec3> meridian = tangentUnit(g, g.normal.cross(planeNormal));
-      if (!meridian || spec_.kind != FieldKind::Spiral) return meridian;
-      // Loxodrome: a fixed angle to the meridians.
-      return Vec3(std::cos(rad) * *meridian + std::sin(rad) * g.normal.cross(*meridian));
-    }
+      return meridian(p);
+    case FieldKind::Spiral:
+      return rotated(meridian(p));  // loxodrome: a fixed angle to the meridians
   }
   return std::nullopt;
 }
@@ -175,10 +181,16 @@ std::optional<Vec3> DirectionField::first(const SurfacePoint& p) const {
 std::optional<Vec3> DirectionField::direction(const SurfacePoint& p, Family family, const Vec3* previous) const {
   const LocalGeometry& g = p.g;
   std::optional<Vec3> d = first(p);
+  const bool umbilic = isUmbilic(g, walker_.cell());
   bool anyIsFine = !d && (spec_.kind == FieldKind::Principal || spec_.kind == FieldKind::Angle);
-  if (d && family == Family::Conjugate) {
-    if (spec_.kind == FieldKind::Principal) {
-      d = g.normal.cross(*d);  // principal directions are conjugate and orthogonal
+  if (d && spec_.kind == FieldKind::Principal && previous && !umbilic) {
+    // Curvature lines by continuity, not by label: where k1 and k2 cross (an umbilic curve, e.g. on a surface
+    // of revolution) d1 and d2 swap, and a line following d1 would turn by 90 degrees.
+    const Vec3 other = g.normal.cross(*d);
+    if (std::abs(other.dot(*previous)) > std::abs(d->dot(*previous))) d = other;
+  } else if (d && family == Family::Conjugate) {
+    if (spec_.kind == FieldKind::Principal || umbilic) {
+      d = g.normal.cross(*d);  // principal directions (all, at an umbilic) are conjugate and orthogonal
     } else {
       const std::optional<Vec2> c = conjugateDirection(g, tangentVector(g, *d));
       // §5.3: at a parabolic point the zero-curvature direction is conjugate to every direction.
@@ -260,6 +272,11 @@ FlowLine traceFlowLine(const DirectionField& field, Family family, const Surface
       continue;
     }
     const double segment = (pn.point() - x).norm();
+    if (segment < 0.25 * h) {
+      // The projection does not follow the step: the foot is held at a trimmed edge within the tolerance.
+      line.end = FlowLine::End::Boundary;
+      return line;
+    }
     if (detectClosure && line.length + segment > 3 * cell) {
       // Back at the start, heading the same way: a loop. Close it exactly at the start.
       const Vec3 s = pn.point() - x;

@@ -96,7 +96,7 @@ Vec3 nearestOnPlanes(const Eigen::Matrix<double, Planes, 3>& normals, const Eige
 
 // §4.1: the three tangent planes at the triangle's corners meet in one point. Where they leave a direction
 // free (a developable's ruling) the point nearest the centroid is taken; false where they are nearly parallel
-// and the point runs off (then §6's fallback applies).
+// and the point runs off (then §6's fallback applies, and x is left as it was).
 bool tangentPoint(const std::vector<LocalGeometry>& geo, const TriMesh& T, int f, const TriangleFrame& fr, Vec3& x) {
   Eigen::Matrix3d A;
   Vec3 b;
@@ -105,8 +105,10 @@ bool tangentPoint(const std::vector<LocalGeometry>& geo, const TriMesh& T, int f
     A.row(c) = g.normal.transpose();
     b(c) = g.normal.dot(g.point);
   }
-  x = nearestOnPlanes<3>(A, b, fr.centroid);
-  return plausible(x, fr);
+  const Vec3 y = nearestOnPlanes<3>(A, b, fr.centroid);
+  if (!plausible(y, fr)) return false;
+  x = y;
+  return true;
 }
 
 // The dual polygon mesh (§4.1, §6 step 4): one face per vertex of the triangulation, through the dual points

@@ -18,6 +18,7 @@ constexpr double kSqrt3 = 1.7320508075688772;
 constexpr double kEquilateralRatio = 0.5 * kSqrt3;  // |CM| / |AB| of an equilateral triangle (planar points)
 // A conjugate direction closer than ~8.6 degrees to AB is as good as asymptotic: the triangles would be slivers.
 constexpr double kMinConjugateSine = 0.15;
+constexpr double kNearParabolic = 0.1;  // kmin / kmax below which a point counts as near a parabolic curve
 constexpr double kResampleBelow = 0.55, kResampleAbove = 1.8;  // row spacing / cell that triggers a resample
 constexpr double kValidMargin = 1.1;  // Method 2 keeps the apexes this far above DE (in units of validStep)
 constexpr double kZipGap = 1.6;       // fronts facing each other closer than this many steps are zipped
@@ -306,18 +307,24 @@ Segment Laying::segment(const Row& row, int i) const {
   const IdealApex ideal = idealApex(g, a, b, Side::Left);
   Vec2 direction(-along.y(), along.x());
   double r;
-  switch (ideal.status) {
+  // Near a parabolic curve both asymptotic directions merge into the zero-curvature one, and a base close to
+  // them is §5.3's business, not a sign that the field is asymptotic.
+  const double kmax = std::max(std::abs(g.k1), std::abs(g.k2)), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
+  const bool sheared = ideal.status == IdealApex::Status::Asymptotic ||
+                       (ideal.ok() && std::abs(cross2(along, ideal.direction)) < kMinConjugateSine);
+  IdealApex::Status status = ideal.status;
+  if (sheared) status = kmin <= kNearParabolic * kmax ? IdealApex::Status::Parabolic : IdealApex::Status::Asymptotic;
+  switch (status) {
     case IdealApex::Status::Ok: {
-      if (std::abs(cross2(along, ideal.direction)) < kMinConjugateSine) {
-        s.asymptotic = true;
-        return s;
-      }
       direction = ideal.direction;
       s.validStep = ideal.validStep;
       r = ideal.step / s.base;
       if (r > o_.maxStepRatio) {
-        // §5.3: the zero-curvature direction points across a parabolic curve and the ideal step explodes.
+        // §5.3: the zero-curvature direction points across a parabolic curve and the ideal step explodes; the
+        // previous layer's step carries the layer across. No bounded step is above DE here (the stars at the
+        // crossing are as degenerate as the indicatrix), so Method 2 is not held to validStep.
         s.reused = true;
+        s.validStep = 0;
         r = std::isnan(previous) ? o_.maxStepRatio : previous;
       } else if (o_.lowerBound > 0) {
         const double bounded = stepLowerBound(r, o_.lowerBound);
@@ -436,10 +443,14 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
   int middle = -1;
   for (int i = 0; i < n; ++i) {
     const Segment& s = segments[i];
-    const std::optional<Vec3> d = s.asymptotic ? std::nullopt : field_.direction(s.M, G_, &s.left);
+    std::optional<Vec3> d = s.asymptotic ? std::nullopt : field_.direction(s.M, G_, &s.left);
     const Vec3 ab = vertices_[row.ids[(i + 1) % row.ids.size()]].point() - vertices_[row.ids[i]].point();
-    if (s.asymptotic || (d && d->cross(ab.normalized()).norm() < kMinConjugateSine))
-      cannotTile(s.M, kAsymptoticBase);
+    if (d && d->cross(ab.normalized()).norm() < kMinConjugateSine) {
+      const double k1 = std::abs(s.M.g.k1), k2 = std::abs(s.M.g.k2);
+      if (std::min(k1, k2) > kNearParabolic * std::max(k1, k2)) cannotTile(s.M, kAsymptoticBase);
+      d = s.left;  // §5.3: near a parabolic curve the conjugate degenerates; lay across as Method 1 would
+    }
+    if (s.asymptotic) cannotTile(s.M, kAsymptoticBase);
     if (!d) continue;  // a singularity of D_G: no apex here
     ells[i] = traceFlowLine(field_, G_, s.M, *d, kEllLength * s.step, false);
     ellArcs[i] = cumulativeArc(ells[i].points);
@@ -894,8 +905,11 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
   // The family of the base curves and its direction at the start.
   Vec3 hint = options.baseDirection.value_or(std::abs(g.normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY());
   hint -= hint.dot(g.normal) * g.normal;
-  const std::optional<Vec3> dF = field.direction(start, Family::First, &hint);
-  const std::optional<Vec3> dG = field.direction(start, Family::Conjugate, &hint);
+  // By label here (no `previous`): principal lines follow continuity only once traced.
+  std::optional<Vec3> dF = field.direction(start, Family::First), dG = field.direction(start, Family::Conjugate);
+  if (!dF && !dG) dF = field.direction(start, Family::First, &hint);  // umbilic / planar start: any direction
+  for (std::optional<Vec3>* d : {&dF, &dG})
+    if (*d && (*d)->dot(hint) < 0) **d = -**d;
   if (!dF && !dG)
     throw Error(ErrorCode::CannotTile, "direction field '" + options.field + "' is singular at the start point " +
                                            describe(walker, start) + "; choose another start point or field");

@@ -44,16 +44,18 @@ Duality parseDuality(const std::string& name) {
 const char* dualityName(Duality d) { return d == Duality::Dupin ? "dupin" : "tangent"; }
 
 TriangulationMethod parseTriangulationMethod(const std::string& name) {
+  if (name == "auto") return TriangulationMethod::Auto;
   if (name == "lattice") return TriangulationMethod::Lattice;
   if (name == "progressive") return TriangulationMethod::Progressive;
   if (name == "prespecified") return TriangulationMethod::Prespecified;
   if (name == "subdivision") return TriangulationMethod::Subdivision;
   throw Error(ErrorCode::InvalidParameter,
-              "method must be 'progressive', 'prespecified', 'subdivision' or 'lattice' (got '" + name + "')");
+              "method must be 'auto', 'progressive', 'prespecified', 'subdivision' or 'lattice' (got '" + name + "')");
 }
 
 const char* triangulationMethodName(TriangulationMethod m) {
   switch (m) {
+    case TriangulationMethod::Auto: return "auto";
     case TriangulationMethod::Lattice: return "lattice";
     case TriangulationMethod::Progressive: return "progressive";
     case TriangulationMethod::Prespecified: return "prespecified";
@@ -147,9 +149,20 @@ SurfacePreview surfacePreview(const PipelineParams& params) {
   return out;
 }
 
-TriangulationStage triangulate(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
-  validate(params);
+TriangulationMethod resolveMethod(const PipelineParams& params) {
+  if (params.method != TriangulationMethod::Auto) return params.method;
+  if (params.mesh) return TriangulationMethod::Prespecified;
+  for (const SurfaceSpec& s : analyticSurfaces())
+    if (s.name == params.surface) return parseTriangulationMethod(s.method);
+  return TriangulationMethod::Progressive;  // makeSurface names the unknown surface
+}
+
+TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel) {
+  validate(given);
+  PipelineParams params = given;
+  params.method = resolveMethod(given);
   TriangulationStage t;
+  t.method = params.method;
   auto checkCell = [&](double area) {
     const double cell = params.cell > 0 ? params.cell : std::sqrt(area / (params.faces * std::sqrt(3.0) / 2.0));
     const double expected = area / (cell * cell * std::sqrt(3.0) / 2.0);
@@ -196,6 +209,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
 
   report("triangulate", 0, "laying the triangulation");
   TriangulationStage stage = triangulate(params, progress, cancel);
+  r.method = stage.method;
   r.surface = std::move(stage.surface);
   r.triangulation = std::move(stage.triangulation);
   r.check = std::move(stage.check);

@@ -200,7 +200,10 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
       // Where the planes leave a direction free (λ → 0 at a parabolic vertex) the vertex keeps its place
       // along it: solve for the displacement with a tiny relative Tikhonov term.
       const Vec3 xv = mesh.vertex(v);
-      const Vec3 dx = (A + 1e-12 * A.trace() * Eigen::Matrix3d::Identity()).ldlt().solve(b - A * xv);
+      Vec3 dx = (A + 1e-12 * A.trace() * Eigen::Matrix3d::Identity()).ldlt().solve(b - A * xv);
+      // A sweep never moves a vertex by more than an edge length: near-degenerate faces (an invalid
+      // triangulation's) have ill-defined planes whose intersections can lie anywhere.
+      if (dx.norm() > h) dx *= h / dx.norm();
       mesh.V.row(v) = (xv + dx).transpose();
     }
   };

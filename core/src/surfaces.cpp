@@ -355,9 +355,24 @@ const std::vector<Entry>& registry() {
 }  // namespace
 
 const std::vector<SurfaceSpec>& analyticSurfaces() {
+  // The method that suits each surface: Method 2 along principal lines where the curvature lines form a
+  // regular net (§7), Method 1 with the lower bound on the torus (Fig. 19), the ruling-aligned lattice on
+  // developables (§3) and the plane, the parameter lattice on the ellipsoid and the ring cyclide, whose
+  // parameter lines are its curvature lines.
+  static const std::map<std::string, std::string> recommended = {
+      {"torus", "progressive"},          {"sphere", "prespecified"},          {"ellipsoid", "lattice"},
+      {"cyclide", "lattice"},            {"vase", "prespecified"},            {"hyperboloid", "prespecified"},
+      {"elliptic-paraboloid", "prespecified"}, {"hyperbolic-paraboloid", "prespecified"},
+      {"freeform", "prespecified"},      {"enneper", "prespecified"},         {"catenoid", "prespecified"},
+      {"helicoid", "progressive"},       {"cylinder", "lattice"},             {"cone", "lattice"},
+      {"plane", "lattice"}};
   static const std::vector<SurfaceSpec> specs = [] {
     std::vector<SurfaceSpec> s;
-    for (const Entry& e : registry()) s.push_back(e.spec);
+    for (const Entry& e : registry()) {
+      s.push_back(e.spec);
+      const auto it = recommended.find(e.spec.name);
+      if (it != recommended.end()) s.back().method = it->second;
+    }
     return s;
   }();
   return specs;

@@ -58,8 +58,66 @@ double cellForFaceCount(const ParametricSurface& surface, int faces) {
   return std::sqrt(L.x() * L.y() / (std::max(faces, 1) * std::sqrt(3.0) / 2.0));
 }
 
-Triangulation latticeTriangulation(const ParametricSurface& surface, double cell) {
+namespace {
+
+// The same surface with u and v exchanged, so the lattice can run its rows along the other parameter.
+class SwappedSurface final : public ParametricSurface {
+ public:
+  explicit SwappedSurface(const ParametricSurface& base) : base_(base) {}
+  std::string name() const override { return base_.name(); }
+  Domain domain() const override {
+    const Domain d = base_.domain();
+    return {d.v0, d.v1, d.u0, d.u1, d.periodicV, d.periodicU};
+  }
+  Jet jet(double u, double v) const override {
+    const Jet j = base_.jet(v, u);
+    return {j.P, j.Pv, j.Pu, j.Pvv, j.Puv, j.Puu};
+  }
+
+ private:
+  const ParametricSurface& base_;
+};
+
+// Mean |normal curvature| along the u-lines and along the v-lines.
+Eigen::Vector2d meanNormalCurvatures(const ParametricSurface& s) {
+  const auto d = s.domain();
+  constexpr int n = 16;
+  Eigen::Vector2d k = Eigen::Vector2d::Zero();
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const auto jt = s.jet(d.u0 + (d.u1 - d.u0) * (i + 0.5) / n, d.v0 + (d.v1 - d.v0) * (j + 0.5) / n);
+      const Vec3 normal = jt.Pu.cross(jt.Pv).normalized();
+      k.x() += std::abs(jt.Puu.dot(normal)) / jt.Pu.squaredNorm();
+      k.y() += std::abs(jt.Pvv.dot(normal)) / jt.Pv.squaredNorm();
+    }
+  return k / (n * n);
+}
+
+Triangulation rowLattice(const ParametricSurface& surface, double cell);
+
+}  // namespace
+
+Triangulation latticeTriangulation(const ParametricSurface& surface, double cell, LatticeRows rows) {
   if (!(cell > 0) || !std::isfinite(cell)) throw Error(ErrorCode::InvalidParameter, "cell size must be positive");
+  // Auto: rows follow the parameter lines of smaller normal curvature, on a developable its rulings (the
+  // only direction its P-Hex faces can be laid along, §3), on a torus its parallels (§7, Fig. 19).
+  if (rows == LatticeRows::Auto) {
+    const Eigen::Vector2d k = meanNormalCurvatures(surface);
+    rows = k.y() < 0.5 * k.x() ? LatticeRows::V : LatticeRows::U;
+  }
+  if (rows == LatticeRows::V) {
+    Triangulation t = rowLattice(SwappedSurface(surface), cell);
+    for (Vec2& uv : t.uv) uv = Vec2(uv.y(), uv.x());
+    for (int f = 0; f < t.mesh.F.rows(); ++f) std::swap(t.mesh.F(f, 1), t.mesh.F(f, 2));  // u, v exchanged: flip
+    t.notes.push_back("lattice rows along the v parameter lines");
+    return t;
+  }
+  return rowLattice(surface, cell);
+}
+
+namespace {
+
+Triangulation rowLattice(const ParametricSurface& surface, double cell) {
   const auto d = surface.domain();
   const Eigen::Vector2d L = meanCurveLengths(surface);
   const double rowStep = cell * std::sqrt(3.0) / 2.0;
@@ -100,6 +158,8 @@ Triangulation latticeTriangulation(const ParametricSurface& surface, double cell
   for (int f = 0; f < static_cast<int>(tris.size()); ++f) t.mesh.F.row(f) = tris[f].transpose();
   return t;
 }
+
+}  // namespace
 
 std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface& surface) {
   const int nv = static_cast<int>(t.mesh.V.rows());

@@ -37,9 +37,10 @@ Options of `phex run`:
   --mesh FILE               an uploaded triangle mesh (OBJ, OFF, PLY, STL) instead of --surface; for
                             --method subdivision, the convex control mesh
   --param NAME=VALUE        a surface parameter, e.g. --param R=2 (repeatable)
-  --method NAME             triangulation: progressive (default, §5.2 Method 1), prespecified
-                            (Method 2, along --field), subdivision (§7, closed convex surfaces) or
-                            lattice (parameter rows; analytic surfaces only)
+  --method NAME             triangulation: auto (default: the surface's recommended method, see
+                            `phex surfaces`; prespecified for uploaded meshes), progressive (§5.2
+                            Method 1), prespecified (Method 2, along --field), subdivision (§7, closed
+                            convex surfaces) or lattice (parameter rows; analytic surfaces only)
   --field SPEC              direction field: principal (default), angle:DEG, param, radial,
                             diverging[:DEG], spiral[:DEG]
   --lower-bound B           §5.3 lower bound on the step ratio |CM|/|AB|, 0..2 (default 0.3; 0 off)
@@ -148,6 +149,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
   return {{"phex", "0.1.0"},
           {"params", params},
           {"triangulation", triangulationJson(r.triangulation, r.check)},
+          {"methodUsed", phex::triangulationMethodName(r.method)},
           {"mesh", {{"vertices", r.metrics.vertexCount}, {"faces", r.metrics.faceCount}, {"facesBySize", bySize}}},
           {"planarity", {{"max", r.metrics.planarityMax}, {"mean", r.metrics.planarityMean},
                          {"initialMax", r.solve.initialPlanarityMax}}},
@@ -302,7 +304,7 @@ int curvature(const std::vector<std::string>& args) {
 
 int surfaces() {
   for (const auto& s : phex::analyticSurfaces()) {
-    std::cout << s.name << " — " << s.description << "\n";
+    std::cout << s.name << " — " << s.description << " (method auto: " << s.method << ")\n";
     for (const auto& prm : s.parameters)
       std::cout << "    " << prm.name << " = " << prm.defaultValue << "  [" << prm.min << ", " << prm.max << "]  "
                 << prm.description << "\n";

@@ -66,10 +66,11 @@ TEST_CASE("triangulation: the star check on regular lattices") {
 }
 
 TEST_CASE("triangulation: invalid stars predict self-intersecting dual faces (Fig. 11 top)") {
-  // Parameter lines of the hyperboloid of one sheet put all three edge directions of a lattice triangle
-  // between the asymptotic directions (Proposition 5 fails), as in the paper's Fig. 11 (top).
+  // Rows along the hyperboloid's circles put all three edge directions of a lattice triangle between the
+  // asymptotic directions (Proposition 5 fails), as in the paper's Fig. 11 (top); rows along its
+  // meridians (the Auto choice) do not.
   const ParametricSurfacePtr s = makeSurface("hyperboloid");
-  const Triangulation t = latticeTriangulation(*s, cellForFaceCount(*s, 400));
+  const Triangulation t = latticeTriangulation(*s, cellForFaceCount(*s, 400), LatticeRows::U);
   const TriangulationCheck c = checkTriangulation(t, *s);
   const DualMesh d = tangentDual(t, *s);
   const MeshMetrics m = measure(d.mesh);
@@ -81,4 +82,7 @@ TEST_CASE("triangulation: invalid stars predict self-intersecting dual faces (Fi
     if (m.selfIntersecting[f])
       predicted += std::count(c.invalidStars.begin(), c.invalidStars.end(), d.faceVertex[f]) > 0;
   CHECK(predicted == m.selfIntersectingCount);
+  const Triangulation valid = latticeTriangulation(*s, cellForFaceCount(*s, 400));
+  CHECK(checkTriangulation(valid, *s).invalidStars.empty());
+  CHECK(measure(tangentDual(valid, *s).mesh).selfIntersectingCount == 0);
 }

@@ -48,7 +48,7 @@ class SurfaceWalker {
 
 // Which direction field; parsed from the strings of `parseFieldSpec`.
 enum class FieldKind {
-  Principal,  // "principal": curvature lines, d1 (its conjugate is d2)
+  Principal,  // "principal": curvature lines, d1 (its conjugate is d2); at umbilics the meridians of "radial"
   Angle,      // "angle:DEG": d1 rotated by DEG degrees in the tangent plane
   Param,      // "param" / "param:u" (Pu), "param:v" (Pv): parameter lines, ParametricSurface only
   Radial,     // "radial": meridians, the plane sections through the z axis through the centre of the bounds
@@ -78,12 +78,13 @@ class DirectionField {
   DirectionField(const SurfaceWalker& walker, const FieldSpec& spec);
 
   // The unit tangent of `family` at p, signed to agree with `previous` when given (a line field has no sign;
-  // flow lines keep it continuous). nullopt at a singularity of the field: an umbilic for "principal" and
-  // "angle" (principal directions undefined), a point where the axis is normal to the surface for the
-  // meridian fields, and for the conjugate family a parabolic point whose zero-curvature direction is the
-  // field itself (§5.3: it is conjugate to every direction). Where the directions are undefined because the
-  // surface is planar there (or umbilic), `previous` projected onto the tangent plane is continued, as any
-  // direction is as good as any other there.
+  // flow lines keep it continuous). nullopt at a singularity of the field: a point where the axis meets the
+  // surface at right angles for the meridian fields (and for "principal" / "angle" at an umbilic, where they
+  // follow the meridians), and for the conjugate family a parabolic point whose zero-curvature direction is
+  // the field itself (§5.3: it is conjugate to every direction). Where the directions are undefined because
+  // any direction is as good as any other there (planar points, such parabolic points), `previous` projected
+  // onto the tangent plane is continued. For "principal" with `previous` given, the family is the
+  // curvature line nearest to `previous` (continuity across curves where k1 and k2 swap labels).
   std::optional<Vec3> direction(const SurfacePoint& p, Family family, const Vec3* previous = nullptr) const;
 
   const FieldSpec& spec() const { return spec_; }
@@ -91,6 +92,7 @@ class DirectionField {
 
  private:
   std::optional<Vec3> first(const SurfacePoint& p) const;
+  std::optional<Vec3> meridian(const SurfacePoint& p) const;
 
   const SurfaceWalker& walker_;
   FieldSpec spec_;

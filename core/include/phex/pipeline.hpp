@@ -18,12 +18,13 @@ constexpr int kMaxFaces = 1000000;  // the largest face count phex accepts
 
 // How the triangulation is laid (§5, §7).
 enum class TriangulationMethod {
+  Auto,          // the analytic surface's recommended method (SurfaceSpec::method); uploaded meshes: Prespecified
   Lattice,       // rows of the parameter domain, every other one shifted (analytic surfaces only)
   Progressive,   // Method 1, progressive conjugation (§5.2)
   Prespecified,  // Method 2, pre-specified conjugation along a direction field (§5.2)
   Subdivision    // Loop subdivision of a convex control mesh (§7): closed convex surfaces, 12 pentagons
 };
-// "lattice" | "progressive" | "prespecified" | "subdivision"; parseTriangulationMethod throws
+// "auto" | "lattice" | "progressive" | "prespecified" | "subdivision"; parseTriangulationMethod throws
 // Error(InvalidParameter) for other names.
 TriangulationMethod parseTriangulationMethod(const std::string& name);
 const char* triangulationMethodName(TriangulationMethod m);
@@ -42,7 +43,7 @@ struct PipelineParams {
   std::string surface = "torus";   // an analytic surface (analyticSurfaces()), or a subdivisionControls() name
   SurfaceParams surfaceParams;     // its parameters; missing ones take their defaults
   std::optional<MeshInput> mesh;   // an uploaded mesh instead of `surface` (for subdivision: the control mesh)
-  TriangulationMethod method = TriangulationMethod::Progressive;
+  TriangulationMethod method = TriangulationMethod::Auto;
   std::string field = "principal"; // direction field of the conjugate methods (see parseFieldSpec)
   double lowerBound = 0.3;         // §5.3 step-ratio lower bound b, in [0, 2]; 0 disables it
   int faces = 2000;                // wanted number of hexagons, 12 .. kMaxFaces (ignored when cell > 0)
@@ -65,6 +66,7 @@ struct StageTiming {
 };
 
 struct PipelineResult {
+  TriangulationMethod method;  // the triangulation method used (Auto resolved)
   SurfacePtr surface;          // the surface tiled (analytic, uploaded mesh, or subdivision limit surface)
   Triangulation triangulation;
   TriangulationCheck check;    // Propositions 4/5 on every star, valences, edge lengths
@@ -86,11 +88,15 @@ struct SurfacePreview {
 };
 SurfacePreview surfacePreview(const PipelineParams& params);
 
+// The method `params` asks for, with Auto resolved.
+TriangulationMethod resolveMethod(const PipelineParams& params);
+
 // Throws Error(InvalidParameter) naming the first parameter that is wrong.
 void validate(const PipelineParams& params);
 
 // The first stage alone: the surface of `params` and its triangulation, checked.
 struct TriangulationStage {
+  TriangulationMethod method;  // the method used (Auto resolved)
   SurfacePtr surface;
   Triangulation triangulation;
   TriangulationCheck check;

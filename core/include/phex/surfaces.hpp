@@ -19,6 +19,9 @@ struct SurfaceSpec {
   std::string name;
   std::string description;
   std::vector<ParameterSpec> parameters;
+  // The triangulation method that tiles it best with its defaults (what method "auto" picks), as measured
+  // over the method x surface matrix in tests/core/pipeline.cpp.
+  std::string method = "progressive";
 };
 
 using SurfaceParams = std::map<std::string, double>;

@@ -22,10 +22,17 @@ std::vector<LocalGeometry> vertexGeometry(const Triangulation& triangulation, co
 // Edge length that gives about `faces` hexagons (one per interior vertex) on the surface.
 double cellForFaceCount(const ParametricSurface& surface, int faces);
 
-// A lattice triangulation in parameter space: rows of constant v, spaced so that triangles are close
-// to equilateral in 3D for edge length `cell`, every other row shifted by half a step. Every interior
-// vertex has valence 6. Periodic directions close up without a seam.
-Triangulation latticeTriangulation(const ParametricSurface& surface, double cell);
+// Which parameter lines the rows of a lattice follow.
+enum class LatticeRows {
+  Auto,  // the lines of smaller mean normal curvature: a developable's rulings (§3), a torus' parallels (§7)
+  U,     // rows of constant v
+  V      // rows of constant u
+};
+
+// A lattice triangulation in parameter space: rows spaced so that triangles are close to equilateral in 3D
+// for edge length `cell`, every other row shifted by half a step. Every interior vertex has valence 6.
+// Periodic directions close up without a seam.
+Triangulation latticeTriangulation(const ParametricSurface& surface, double cell, LatticeRows rows = LatticeRows::Auto);
 
 // What a triangulation promises for its dual P-Hex mesh (§4.2): every interior vertex's star checked in its
 // tangent plane with the vertex's Dupin indicatrix — each incident triangle, taken as the fundamental
