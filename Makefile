@@ -54,8 +54,11 @@ demo: native wasm web
 bench: native wasm web
 	@echo "== pipeline, native and wasm (node)"
 	@node bench/run.mjs
-	@echo "== mesh loading and curvature, native"
+	@echo "== mesh loading and curvature, native then wasm"
 	@build/native/bin/phex_bench_mesh_curvature
+	@$(NODE) bench/mesh-curvature-wasm.mjs
+	@echo "== laying triangulations, native"
+	@build/native/bin/phex_bench_laying
 	@echo "== web app in headless Chromium"
 	@node bench/browser.mjs
 

@@ -68,14 +68,16 @@ function describeInput(input, { description, min, max, default: value, values })
 }
 
 function buildForm() {
-  $('surface').replaceChildren(...surfaces.map((s) => new Option(s.name, s.name)));
+  // Analytic surfaces, then the built-in control meshes of the subdivision method (§7).
+  const controls = (capabilities.subdivisionControls ?? []).map((n) => new Option(`${n} (subdivision control)`, n));
+  $('surface').replaceChildren(...surfaces.map((s) => new Option(s.name, s.name)), ...controls);
   for (const spec of PARAMETERS) {
     const input = $(spec.name);
     if (!input) continue;
     describeInput(input, spec);
     input.closest('label').hidden = !supported(spec);
   }
-  $('method').replaceChildren(...capabilities.methods.map((m) => new Option(m, m, m === 'lattice', m === 'lattice')));
+  $('method').replaceChildren(...capabilities.methods.map((m) => new Option(m, m, m === 'auto', m === 'auto')));
   $('field-values').replaceChildren(...capabilities.fields.map((f) => new Option(f.replace('angle:DEG', 'angle:30'))));
   $('color').replaceChildren(...Object.entries(FACE_MODES).map(([value, label]) => new Option(label, value)));
   const curvature = $('view').querySelector('[value=curvature]');
@@ -96,7 +98,10 @@ function buildForm() {
 }
 
 function buildSurfaceParams(name, values = {}) {
-  const spec = surfaces.find((s) => s.name === name);
+  const spec = surfaces.find((s) => s.name === name) ?? {
+    parameters: [],
+    description: 'A convex control mesh: Loop subdivision gives a closed convex surface whose P-Hex mesh has 12 pentagons (§7). Use the subdivision method.',
+  };
   const fieldset = $('surface-params');
   fieldset.replaceChildren();
   for (const p of spec.parameters) {
@@ -131,8 +136,12 @@ function readParams() {
 }
 
 /** Sets the form from a design (a preset's or a link's params); missing entries take their defaults. */
+function knownSurface(name) {
+  return surfaces.some((s) => s.name === name) || (capabilities.subdivisionControls ?? []).includes(name);
+}
+
 function writeForm(params) {
-  const name = surfaces.some((s) => s.name === params.surface) ? params.surface : DEFAULT_SURFACE;
+  const name = knownSurface(params.surface) ? params.surface : DEFAULT_SURFACE;
   $('surface').value = name;
   buildSurfaceParams(name, params.surfaceParams);
   for (const spec of FORM_PARAMS) $(spec.name).value = String(params[spec.name] ?? spec.default);
@@ -474,7 +483,7 @@ async function start() {
   buildForm();
   const linked = designFromUrl();
   writeForm(linked?.params ?? { surface: DEFAULT_SURFACE });
-  if (linked?.params.surface && !surfaces.some((s) => s.name === linked.params.surface)) {
+  if (linked?.params.surface && !knownSurface(linked.params.surface)) {
     showError(`The link names an unknown surface "${linked.params.surface}"; showing the ${DEFAULT_SURFACE}.`);
   }
   for (const key of VIEW_KEYS) {

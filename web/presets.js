@@ -55,7 +55,7 @@ export const PRESETS = {
     pending: { method: 'prespecified', field: 'principal' },
   },
   'Fig. 21 convex mesh by Loop subdivision': {
-    params: { surface: 'ellipsoid', faces: 1000 },
+    params: { surface: 'egg', faces: 1000 },
     pending: { method: 'subdivision' },
   },
   'Fig. 22 free-form, pre-specified': {

@@ -161,7 +161,7 @@ export interface Result {
 }
 
 /** A triangulation method (§5): see {@link RunParams.method}. */
-export type Method = 'lattice' | 'progressive' | 'prespecified' | 'subdivision';
+export type Method = 'auto' | 'lattice' | 'progressive' | 'prespecified' | 'subdivision';
 
 /** A direction field for pre-specified conjugation (§5.3): see {@link RunParams.field}. */
 export type Field = 'principal' | `angle:${number}` | 'param' | 'radial' | 'diverging' | 'spiral';
@@ -211,14 +211,15 @@ export interface RunParams {
    */
   solver?: 'local' | 'planes' | 'volumes';
   /**
-   * Triangulation method (needs `capabilities().methods` to list it): 'lattice' (parameter lattice, the
-   * default), 'progressive' conjugation (§5.2), 'prespecified' conjugation along `field` (§5.3),
-   * 'subdivision' (Loop subdivision route for closed convex surfaces, §7).
+   * Triangulation method: 'auto' (default: the surface's recommended method, `SurfaceSpec.method`;
+   * 'prespecified' for uploaded meshes), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
+   * conjugation along `field` (Method 2), 'subdivision' (Loop subdivision of a convex control mesh, §7:
+   * `surface` names a built-in control or `mesh` is the control), 'lattice' (parameter rows).
    */
   method?: Method;
-  /** Direction field of 'prespecified' (needs `capabilities().fields`). Default 'principal'. */
+  /** Direction field of the conjugate methods. Default 'principal'. */
   field?: Field;
-  /** §5.3 step-size lower bound near parabolic curves, relative to the cell size, >= 0 (needs `capabilities().lowerBound`). Default 0: off. */
+  /** §5.3 lower bound b on the step ratio |CM|/|AB| near parabolic curves, in [0, 2]. Default 0.3; 0 turns it off. */
   lowerBound?: number;
 }
 
@@ -318,6 +319,8 @@ export interface SurfaceSpec {
   name: string;
   description: string;
   parameters: SurfaceParameter[];
+  /** The triangulation method `method: 'auto'` uses for this surface. */
+  method: Exclude<Method, 'auto'>;
 }
 
 /** A loaded phex instance. */

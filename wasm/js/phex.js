@@ -30,9 +30,9 @@ export const PARAMETERS = Object.freeze([
   { name: 'maxIterations', type: 'integer', default: 100, min: 1, max: 10_000, description: 'Cap on solver iterations.' },
   { name: 'duality', type: 'enum', default: 'dupin', values: ['dupin', 'tangent'], description: 'Initial dual mesh: Dupin centres (§6) or intersections of tangent planes (§4.1).' },
   { name: 'solver', type: 'enum', default: 'local', values: ['local', 'planes', 'volumes'], description: "Planarity solver: 'local' (fastest), 'planes' (Ceres on face planes), 'volumes' (the paper's tetrahedron volumes)." },
-  { name: 'method', type: 'enum', default: 'lattice', values: ['lattice', 'progressive', 'prespecified', 'subdivision'], requires: 'methods', description: 'Triangulation: parameter lattice, progressive conjugation (§5.2), pre-specified conjugation along a field (§5.3), or Loop subdivision of closed convex surfaces (§7).' },
-  { name: 'field', type: 'field', default: 'principal', values: ['principal', 'angle:DEG', 'param', 'radial', 'diverging', 'spiral'], requires: 'fields', description: "Direction field of pre-specified conjugation (§5.3): principal directions, a fixed angle to them ('angle:30'), parameter lines, radial, diverging or spiral." },
-  { name: 'lowerBound', type: 'number', default: 0, min: 0, max: Infinity, requires: 'lowerBound', description: 'Smallest step length near parabolic curves, relative to the cell size (§5.3); 0 turns the bound off.' },
+  { name: 'method', type: 'enum', default: 'auto', values: ['auto', 'progressive', 'prespecified', 'subdivision', 'lattice'], requires: 'methods', description: "Triangulation: 'auto' (the surface's recommended method, see surfaces(); pre-specified for uploaded meshes), progressive conjugation (§5.2 Method 1), pre-specified conjugation along a field (§5.2 Method 2), Loop subdivision of a convex control mesh (§7), or the parameter lattice." },
+  { name: 'field', type: 'field', default: 'principal', values: ['principal', 'angle:DEG', 'param', 'radial', 'diverging', 'spiral'], requires: 'fields', description: "Direction field of the conjugate methods (§5.2): principal directions, a fixed angle to them ('angle:30'), parameter lines, radial, diverging or spiral." },
+  { name: 'lowerBound', type: 'number', default: 0.3, min: 0, max: 2, requires: 'lowerBound', description: 'Lower bound b on the step ratio |CM|/|AB| near parabolic curves (§5.3), applied smoothly; 0 turns it off.' },
 ]);
 
 /** Formats of uploaded meshes: run({mesh, meshFormat}). */
