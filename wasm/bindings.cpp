@@ -201,13 +201,11 @@ val errorToJs(const char* code, const std::string& message) {
   return out;
 }
 
-val run(val params, val onProgress) {
+// Runs `body`, turning any C++ exception into the {ok: false, code, message} answer.
+template <typename Body>
+val guarded(Body body) {
   try {
-    const phex::PipelineParams p = paramsFromJs(params);
-    phex::ProgressFn progress;
-    if (onProgress.typeOf().as<std::string>() == "function")
-      progress = [&onProgress](const phex::Progress& pr) { onProgress(pr.stage, pr.fraction, pr.message); };
-    return resultToJs(phex::runPipeline(p, progress));
+    return body();
   } catch (const phex::Error& e) {
     return errorToJs(phex::errorCodeName(e.code()), e.what());
   } catch (const std::bad_alloc&) {
@@ -215,6 +213,16 @@ val run(val params, val onProgress) {
   } catch (const std::exception& e) {
     return errorToJs("internal", e.what());
   }
+}
+
+val run(val params, val onProgress) {
+  return guarded([&] {
+    const phex::PipelineParams p = paramsFromJs(params);
+    phex::ProgressFn progress;
+    if (onProgress.typeOf().as<std::string>() == "function")
+      progress = [&onProgress](const phex::Progress& pr) { onProgress(pr.stage, pr.fraction, pr.message); };
+    return resultToJs(phex::runPipeline(p, progress));
+  });
 }
 
 val surfaces() {
@@ -267,7 +275,7 @@ val capabilities() {
 // The surface of `params` (analytic by name, or an uploaded mesh) as a triangle mesh with the principal
 // curvatures at its vertices, for display.
 val surfacePreview(val params) {
-  try {
+  return guarded([&] {
     const phex::PipelineParams p = paramsFromJs(params);
     const phex::SurfacePreview s = phex::surfacePreview(p);
     val out = val::object();
@@ -278,11 +286,7 @@ val surfacePreview(val params) {
     out.set("k1", copyArray("Float64Array", s.k1.data(), s.k1.size()));
     out.set("k2", copyArray("Float64Array", s.k2.data(), s.k2.size()));
     return out;
-  } catch (const phex::Error& e) {
-    return errorToJs(phex::errorCodeName(e.code()), e.what());
-  } catch (const std::exception& e) {
-    return errorToJs("internal", e.what());
-  }
+  });
 }
 
 double heapBytes() { return static_cast<double>(emscripten::val::module_property("HEAPU8")["byteLength"].as<double>()); }

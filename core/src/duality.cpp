@@ -191,7 +191,12 @@ DualMesh assembleDual(const TriMesh& T, const Points& U, const std::vector<Local
 
 }  // namespace
 
-DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
+namespace {
+
+// The dual mesh with every triangle's point placed by `place(f, frame, x)`, which returns false where it fell
+// back to the centroid (x is then the centroid).
+template <typename Place>
+DualMesh dualWith(const Triangulation& tri, const Surface& surface, Place place) {
   const TriMesh& T = tri.mesh;
   const int nf = static_cast<int>(T.F.rows());
   const std::vector<LocalGeometry> geo = vertexGeometry(tri, surface);
@@ -199,6 +204,18 @@ DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
   int fallbacks = 0;
   for (int f = 0; f < nf; ++f) {
     const TriangleFrame fr = frameOf(geo, T, f);
+    Vec3 x = fr.centroid;
+    fallbacks += !place(geo, f, fr, x);
+    U.row(f) = x.transpose();
+  }
+  return assembleDual(T, U, geo, fallbacks);
+}
+
+}  // namespace
+
+DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
+  const TriMesh& T = tri.mesh;
+  return dualWith(tri, surface, [&](const std::vector<LocalGeometry>& geo, int f, const TriangleFrame& fr, Vec3& x) {
     const LocalGeometry* g[3] = {&geo[T.F(f, 0)], &geo[T.F(f, 1)], &geo[T.F(f, 2)]};
     // §6 step 1: parabolic region detection, made scale-free with the triangle size.
     const double h2 = fr.longestEdge * fr.longestEdge;
@@ -207,10 +224,9 @@ DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
       const double K = g[c]->gaussianCurvature();
       parabolic |= std::abs(K) * h2 < 1e-8 || (K > 0) != (g[0]->gaussianCurvature() > 0);
     }
-    Vec3 x = fr.centroid;
     if (!parabolic) {
-      // §6 steps 2-3: one conic centre per vertex, averaged.
-      // The conic of vertex c passes through c itself and the vertical projections of the other two.
+      // §6 steps 2-3: one conic centre per vertex, averaged. The conic of vertex c passes through c itself
+      // and the vertical projections of the other two.
       Vec3 sum = Vec3::Zero();
       bool ok = true;
       for (int c = 0; c < 3 && ok; ++c) {
@@ -218,33 +234,20 @@ DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
         ok = center.has_value();
         if (ok) sum += *center;
       }
-      if (ok && plausible(sum / 3.0, fr)) x = sum / 3.0;
-      else parabolic = true;
+      if (ok && plausible(sum / 3.0, fr)) {
+        x = sum / 3.0;
+        return true;
+      }
     }
     // Where the Dupin conic is undefined the tangent planes may still meet well; §6's centroid is the last resort.
-    if (parabolic) parabolic = !tangentPoint(geo, T, f, fr, x);
-    fallbacks += parabolic;
-    U.row(f) = x.transpose();
-  }
-  return assembleDual(T, U, geo, fallbacks);
+    return tangentPoint(geo, T, f, fr, x);
+  });
 }
 
 DualMesh tangentDual(const Triangulation& tri, const Surface& surface) {
-  const TriMesh& T = tri.mesh;
-  const int nf = static_cast<int>(T.F.rows());
-  const std::vector<LocalGeometry> geo = vertexGeometry(tri, surface);
-  Points U(nf, 3);
-  int fallbacks = 0;
-  for (int f = 0; f < nf; ++f) {
-    const TriangleFrame fr = frameOf(geo, T, f);
-    Vec3 x;
-    if (!tangentPoint(geo, T, f, fr, x)) {
-      x = fr.centroid;
-      ++fallbacks;
-    }
-    U.row(f) = x.transpose();
-  }
-  return assembleDual(T, U, geo, fallbacks);
+  return dualWith(tri, surface, [&](const std::vector<LocalGeometry>& geo, int f, const TriangleFrame& fr, Vec3& x) {
+    return tangentPoint(geo, tri.mesh, f, fr, x);
+  });
 }
 
 }  // namespace phex

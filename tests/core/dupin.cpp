@@ -1,32 +1,16 @@
 #include <catch.hpp>
+
+#include "random_geometry.hpp"
 #include <cmath>
 #include <random>
 
 #include "phex/dupin.hpp"
 
 using namespace phex;
+using namespace phex::testing;
 
 namespace {
 
-LocalGeometry withCurvatures(double k1, double k2) {
-  LocalGeometry g;
-  g.k1 = std::max(k1, k2);
-  g.k2 = std::min(k1, k2);
-  return g;
-}
-
-// Random principal curvatures, magnitudes 0.2 .. 5, signs as asked (+1 / -1 for K > 0 / K < 0).
-LocalGeometry randomGeometry(std::mt19937& rng, int signOfK) {
-  std::uniform_real_distribution<double> logk(std::log(0.2), std::log(5.0));
-  const double s = std::uniform_int_distribution<int>(0, 1)(rng) ? 1.0 : -1.0;
-  return withCurvatures(s * std::exp(logk(rng)), s * signOfK * std::exp(logk(rng)));
-}
-
-// A random point of the tangent plane in a disc of radius 2.
-Vec2 randomPoint(std::mt19937& rng) {
-  std::uniform_real_distribution<double> x(-2.0, 2.0);
-  return Vec2(x(rng), x(rng));
-}
 
 // The Dupin conic level of x around centre m.
 double level(const LocalGeometry& g, const Vec2& x, const Vec2& m) { return secondFundamentalForm(g, x - m, x - m); }

@@ -1,10 +1,13 @@
 #include <catch.hpp>
+
+#include "random_geometry.hpp"
 #include <cmath>
 #include <random>
 
 #include "phex/ideal_triangle.hpp"
 
 using namespace phex;
+using namespace phex::testing;
 
 namespace {
 
@@ -12,24 +15,6 @@ using Hexagon = std::array<Vec2, 6>;
 
 double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
-LocalGeometry withCurvatures(double k1, double k2) {
-  LocalGeometry g;
-  g.k1 = std::max(k1, k2);
-  g.k2 = std::min(k1, k2);
-  return g;
-}
-
-// Random principal curvatures, magnitudes 0.2 .. 5, either overall sign, with the sign of K asked for.
-LocalGeometry randomGeometry(std::mt19937& rng, int signOfK) {
-  std::uniform_real_distribution<double> logk(std::log(0.2), std::log(5.0));
-  const double s = std::uniform_int_distribution<int>(0, 1)(rng) ? 1.0 : -1.0;
-  return withCurvatures(s * std::exp(logk(rng)), s * signOfK * std::exp(logk(rng)));
-}
-
-Vec2 randomPoint(std::mt19937& rng) {
-  std::uniform_real_distribution<double> x(-2.0, 2.0);
-  return Vec2(x(rng), x(rng));
-}
 
 // Proper crossing of segments pq and rs (shared end points and touching count too: the polygon is not simple).
 bool segmentsMeet(const Vec2& p, const Vec2& q, const Vec2& r, const Vec2& s) {
