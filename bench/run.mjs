@@ -1,6 +1,7 @@
 // phex — `make bench`: the pipeline natively and in WebAssembly (node), in the same run, case by case.
 // Figures only: nothing here passes or fails. Prints a table and writes build/bench/pipeline.json.
-//   PHEX_BENCH_QUICK=1   only the 1k and 10k cases
+//   PHEX_BENCH_QUICK=1        only the 1k and 10k cases
+//   PHEX_BENCH_SOLVERS=local  only these solvers (comma-separated)
 import { spawnSync } from 'node:child_process';
 import { mkdirSync, writeFileSync, readFileSync, mkdtempSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -14,10 +15,11 @@ const sizes = process.env.PHEX_BENCH_QUICK ? [1000, 10000] : [1000, 10000, 10000
 
 // Every solver side by side where it finishes in reasonable time; the Ceres ones stop at 10k faces
 // (their Gauss-Newton steps cost seconds there, see the README's table).
+const solvers = (process.env.PHEX_BENCH_SOLVERS ?? 'local,planes,volumes').split(',');
 const cases = [];
 for (const surface of ['torus', 'cyclide'])
   for (const faces of sizes)
-    for (const solver of ['local', 'planes', 'volumes'])
+    for (const solver of solvers)
       if (solver === 'local' || faces <= 10000) cases.push({ surface, faces, solver });
 
 function native(c) {

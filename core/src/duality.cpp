@@ -86,10 +86,9 @@ bool plausible(const Vec3& x, const TriangleFrame& fr) {
 // The point nearest to `start` that lies on all the given tangent planes, as far as they determine it: a
 // minimum-norm least-squares correction, so directions the planes leave free (a developable's ruling, two
 // nearly parallel planes) keep `start`'s coordinate instead of running off.
-template <int Planes>
-Vec3 nearestOnPlanes(const Eigen::Matrix<double, Planes, 3>& normals, const Eigen::Matrix<double, Planes, 1>& offsets,
-                     const Vec3& start) {
-  Eigen::JacobiSVD<Eigen::Matrix<double, Planes, 3>> svd(normals, Eigen::ComputeFullU | Eigen::ComputeFullV);
+// Up to three planes: unused rows of `normals` are zero.
+Vec3 nearestOnPlanes(const Eigen::Matrix3d& normals, const Vec3& offsets, const Vec3& start) {
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(normals, Eigen::ComputeFullU | Eigen::ComputeFullV);
   svd.setThreshold(1e-9);
   return start + svd.solve(offsets - normals * start);
 }
@@ -105,7 +104,7 @@ bool tangentPoint(const std::vector<LocalGeometry>& geo, const TriMesh& T, int f
     A.row(c) = g.normal.transpose();
     b(c) = g.normal.dot(g.point);
   }
-  const Vec3 y = nearestOnPlanes<3>(A, b, fr.centroid);
+  const Vec3 y = nearestOnPlanes(A, b, fr.centroid);
   if (!plausible(y, fr)) return false;
   x = y;
   return true;
@@ -138,11 +137,11 @@ DualMesh assembleDual(const TriMesh& T, const Points& U, const std::vector<Local
     const long long key = static_cast<long long>(std::min(a, b)) * nv + std::max(a, b);
     auto [it, added] = edgeId.emplace(key, static_cast<int>(points.size()));
     if (added) {
-      Eigen::Matrix<double, 2, 3> N;
-      N << geo[a].normal.transpose(), geo[b].normal.transpose();
-      const Eigen::Vector2d d(geo[a].normal.dot(geo[a].point), geo[b].normal.dot(geo[b].point));
+      Eigen::Matrix3d N;
+      N << geo[a].normal.transpose(), geo[b].normal.transpose(), Vec3::Zero().transpose();
+      const Vec3 d(geo[a].normal.dot(geo[a].point), geo[b].normal.dot(geo[b].point), 0.0);
       const Vec3 mid = 0.5 * (geo[a].point + geo[b].point);
-      Vec3 x = nearestOnPlanes<2>(N, d, mid);
+      Vec3 x = nearestOnPlanes(N, d, mid);
       if (!x.allFinite() || (x - mid).norm() > 0.75 * (geo[a].point - geo[b].point).norm()) x = mid;
       points.push_back(x);
       dual.vertexTriangle.push_back(-1);

@@ -192,6 +192,14 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       lo.cell = cell;
       lo.lowerBound = params.lowerBound;
       t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
+      // Layers of ideal triangles are not exactly equilateral, so the area per vertex differs from the
+      // estimate: when a face count was asked for and missed by more than 10 %, lay again with the cell
+      // scaled by the square root of the ratio.
+      const double ratio = double(t.triangulation.mesh.V.rows()) / params.faces;
+      if (params.cell == 0 && (ratio > 1.1 || ratio < 0.9)) {
+        lo.cell = cell * std::sqrt(ratio);
+        t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
+      }
     }
   }
   t.check = checkTriangulation(t.triangulation, *t.surface);

@@ -356,11 +356,11 @@ const std::vector<Entry>& registry() {
 
 const std::vector<SurfaceSpec>& analyticSurfaces() {
   // The method that suits each surface: Method 2 along principal lines where the curvature lines form a
-  // regular net (§7), Method 1 with the lower bound on the torus (Fig. 19), the ruling-aligned lattice on
-  // developables (§3) and the plane, the parameter lattice on the ellipsoid and the ring cyclide, whose
-  // parameter lines are its curvature lines.
+  // regular net (§7), Method 1 on the helicoid, the ruling-aligned lattice on developables (§3) and the
+  // plane, the parameter lattice where the parameter lines are the curvature lines and close up exactly
+  // (torus, ring cyclide, ellipsoid: all hexagons, no seam).
   static const std::map<std::string, std::string> recommended = {
-      {"torus", "progressive"},          {"sphere", "prespecified"},          {"ellipsoid", "lattice"},
+      {"torus", "lattice"},          {"sphere", "prespecified"},          {"ellipsoid", "lattice"},
       {"cyclide", "lattice"},            {"vase", "prespecified"},            {"hyperboloid", "prespecified"},
       {"elliptic-paraboloid", "prespecified"}, {"hyperbolic-paraboloid", "prespecified"},
       {"freeform", "prespecified"},      {"enneper", "prespecified"},         {"catenoid", "prespecified"},
