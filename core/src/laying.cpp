@@ -201,7 +201,7 @@ class Laying {
   std::vector<std::vector<Vec3>> fieldLines_;
 
   // What happened, for the notes.
-  int boundedLayers_ = 0, boundedSegments_ = 0, reusedLayers_ = 0, reusedSegments_ = 0, parabolicSegments_ = 0;
+  int boundedLayers_ = 0, boundedSegments_ = 0, reusedLayers_ = 0, reusedSegments_ = 0;
   int resampled_ = 0, boundaryStops_ = 0, collisions_ = 0, invalidDrops_ = 0, splits_ = 0, layers_ = 0;
   int asymptoticStops_ = 0;
   std::string firstResample_, firstInvalidDrop_, firstReuse_, firstAsymptoticStop_;
