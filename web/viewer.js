@@ -66,8 +66,7 @@ export class Viewer {
 
   clear() {
     for (const child of [...this.#group.children]) {
-      child.geometry.dispose();
-      child.material.dispose();
+      child.geometry.dispose();  // materials are shared (see surfaceMaterial) and stay
       this.#group.remove(child);
     }
     this.#faces = null;
@@ -88,13 +87,20 @@ export class Viewer {
     const sharedNormals = shared.getAttribute('normal').array;
     shared.dispose();
 
+    // Plain index loops: this runs on the main thread for every result, and views or per-element
+    // allocations would make it the longest task of a run.
     const n = faceOfTriangle.length;
     const position = new Float32Array(n * 9);
     const smoothNormals = new Float32Array(n * 9);
     for (let k = 0; k < 3 * n; k++) {
-      const v = index[k];
-      position.set(positions.subarray(3 * v, 3 * v + 3), 3 * k);
-      smoothNormals.set(sharedNormals.subarray(3 * v, 3 * v + 3), 3 * k);
+      const v = 3 * index[k];
+      const o = 3 * k;
+      position[o] = positions[v];
+      position[o + 1] = positions[v + 1];
+      position[o + 2] = positions[v + 2];
+      smoothNormals[o] = sharedNormals[v];
+      smoothNormals[o + 1] = sharedNormals[v + 1];
+      smoothNormals[o + 2] = sharedNormals[v + 2];
     }
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute('position', new THREE.BufferAttribute(position, 3));
@@ -114,10 +120,16 @@ export class Viewer {
     if (!this.#faces) return;
     const { mesh, faceOfTriangle } = this.#faces;
     const attribute = mesh.geometry.getAttribute('color');
+    const rgb = attribute.array;
     const color = new THREE.Color();
+    let face = -1;
     for (let t = 0; t < faceOfTriangle.length; t++) {
-      faceColor(faceOfTriangle[t], color);
-      for (let k = 0; k < 3; k++) attribute.setXYZ(3 * t + k, color.r, color.g, color.b);
+      if (faceOfTriangle[t] !== face) faceColor((face = faceOfTriangle[t]), color);  // a fan's triangles share it
+      for (let k = 9 * t; k < 9 * t + 9; k += 3) {
+        rgb[k] = color.r;
+        rgb[k + 1] = color.g;
+        rgb[k + 2] = color.b;
+      }
     }
     attribute.needsUpdate = true;
     this.requestRender();
@@ -137,8 +149,7 @@ export class Viewer {
     }
     geometry.setAttribute('color', new THREE.BufferAttribute(colors, 3));
     geometry.computeVertexNormals();
-    const object = new THREE.Mesh(geometry, surfaceMaterial());
-    object.material.flatShading = flat;
+    const object = new THREE.Mesh(geometry, surfaceMaterial(flat));
     this.#group.add(object);
     if (wireframe) {
       const edges = [];
@@ -208,15 +219,29 @@ export class Viewer {
   }
 }
 
-function surfaceMaterial() {
-  return new THREE.MeshLambertMaterial({
-    vertexColors: true,
-    side: THREE.DoubleSide,
-    // Push faces back a little so the edges drawn on them are never hidden.
-    polygonOffset: true,
-    polygonOffsetFactor: 1,
-    polygonOffsetUnits: 1,
-  });
+// One material per look, shared by every result: three.js keeps a shader program only while a material
+// uses it, so fresh materials per result would recompile the shaders on the main thread each time.
+const materials = new Map();
+
+function surfaceMaterial(flat = false) {
+  const key = flat ? 'flat' : 'smooth';
+  if (!materials.has(key)) {
+    materials.set(key, new THREE.MeshLambertMaterial({
+      vertexColors: true,
+      side: THREE.DoubleSide,
+      flatShading: flat,
+      // Push faces back a little so the edges drawn on them are never hidden.
+      polygonOffset: true,
+      polygonOffsetFactor: 1,
+      polygonOffsetUnits: 1,
+    }));
+  }
+  return materials.get(key);
+}
+
+function lineMaterial(color) {
+  if (!materials.has(color)) materials.set(color, new THREE.LineBasicMaterial({ color }));
+  return materials.get(color);
 }
 
 /** The polygon boundaries (not the fan triangles) as vertex pairs, each edge once. */
@@ -244,18 +269,21 @@ function uniqueEdges(pairs) {
   return out;
 }
 
-function edgeLines(positions, pairs) {
+function edgeLines(positions, pairs, color = EDGE_COLOR) {
   const position = new Float32Array(pairs.length * 3);
-  pairs.forEach((v, i) => position.set(positions.subarray(3 * v, 3 * v + 3), 3 * i));
+  for (let i = 0; i < pairs.length; i++) {
+    const v = 3 * pairs[i];
+    position[3 * i] = positions[v];
+    position[3 * i + 1] = positions[v + 1];
+    position[3 * i + 2] = positions[v + 2];
+  }
   const geometry = new THREE.BufferGeometry();
   geometry.setAttribute('position', new THREE.BufferAttribute(position, 3));
-  return new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ color: EDGE_COLOR }));
+  return new THREE.LineSegments(geometry, lineMaterial(color));
 }
 
 function polylineObject({ positions, offsets }) {
   const pairs = [];
   for (let l = 0; l + 1 < offsets.length; l++) for (let p = offsets[l]; p + 1 < offsets[l + 1]; p++) pairs.push(p, p + 1);
-  const lines = edgeLines(positions, pairs);
-  lines.material.color.set(FIELD_COLOR);
-  return lines;
+  return edgeLines(positions, pairs, FIELD_COLOR);
 }
