@@ -13,7 +13,7 @@ import { chromium } from 'playwright-core';
 import { serve } from '../scripts/serve.js';
 
 const repo = fileURLToPath(new URL('..', import.meta.url));
-const DEBOUNCE_MS = 300; // web/main.js RERUN_DELAY_MS
+const DEBOUNCE_MS = 150; // web/main.js RERUN_DELAY_MS
 const EDITS = 5;
 
 const median = (xs) => [...xs].sort((a, b) => a - b)[Math.floor(xs.length / 2)];

@@ -16,15 +16,20 @@ const sizes = process.env.PHEX_BENCH_QUICK ? [1000, 10000] : [1000, 10000, 10000
 // Every solver side by side where it finishes in reasonable time; the Ceres ones stop at 10k faces
 // (their Gauss-Newton steps cost seconds there, see the README's table).
 const solvers = (process.env.PHEX_BENCH_SOLVERS ?? 'local,planes,volumes').split(',');
+// An uploaded free-form mesh: the free-form height field sampled finely as OBJ by phex itself.
+const freeformMesh = join(scratch, 'freeform.obj');
+spawnSync(cli, ['triangulate', '--surface', 'freeform', '--method', 'lattice', '--faces', '60000', '--out', freeformMesh, '--quiet']);
 const cases = [];
-for (const surface of ['torus', 'cyclide'])
+for (const surface of ['torus', 'cyclide', 'freeform.obj'])
   for (const faces of sizes)
     for (const solver of solvers)
       if (solver === 'local' || faces <= 10000) cases.push({ surface, faces, solver });
+const isMesh = (c) => c.surface.endsWith('.obj');
 
 function native(c) {
   const report = join(scratch, 'r.json');
-  const args = ['run', '--surface', c.surface, '--faces', String(c.faces), '--solver', c.solver, '--report', report, '--quiet'];
+  const input = isMesh(c) ? ['--mesh', freeformMesh] : ['--surface', c.surface];
+  const args = ['run', ...input, '--faces', String(c.faces), '--solver', c.solver, '--report', report, '--quiet'];
   const started = performance.now();
   const p = spawnSync(cli, args, { encoding: 'utf8' });
   const wall = performance.now() - started;
@@ -38,7 +43,8 @@ function native(c) {
 }
 
 function wasm(c) {
-  const p = spawnSync('node', ['--no-experimental-fetch', join(repo, 'bench/wasm-case.mjs'), JSON.stringify(c)],
+  const params = isMesh(c) ? { meshFile: freeformMesh, faces: c.faces, solver: c.solver } : c;
+  const p = spawnSync('node', ['--no-experimental-fetch', join(repo, 'bench/wasm-case.mjs'), JSON.stringify(params)],
     { encoding: 'utf8', maxBuffer: 1 << 26 });
   if (p.status !== 0) return { error: (p.stderr || p.stdout).trim().split('\n').pop() };
   return JSON.parse(p.stdout.trim().split('\n').pop());

@@ -1,12 +1,15 @@
 // One benchmark case in WebAssembly, in a fresh process so the heap high-water mark is this case's own.
 // Usage: node --no-experimental-fetch bench/wasm-case.mjs '<params JSON>'   → one JSON line on stdout.
+import { readFileSync } from 'node:fs';
 import { createPHex } from '../build/pkg/phex.js';
 
-const params = JSON.parse(process.argv[2]);
+// `meshFile` names an uploaded mesh: its bytes go in as `mesh`.
+const { meshFile, ...params } = JSON.parse(process.argv[2]);
+if (meshFile) Object.assign(params, { mesh: new Uint8Array(readFileSync(meshFile)), meshFormat: 'obj', meshName: meshFile });
 const phex = await createPHex({ worker: false });
 // A small run first, so the engine has compiled the hot code with its optimizing tier as it would have
 // after the first design in a session; the figures then compare steady states.
-await phex.run({ ...params, faces: 200, cell: 0 });
+await phex.run({ ...params, faces: 200 });
 const started = performance.now();
 const r = await phex.run(params);
 const wall = performance.now() - started;

@@ -5,7 +5,9 @@ import { PRESETS, presetParams } from './presets.js';
 import { Viewer } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
-const RERUN_DELAY_MS = 300;
+// Edits within this delay coalesce (typing a number); short enough that a finished 2k-face edit is on screen
+// within 300 ms.
+const RERUN_DELAY_MS = 150;
 const DEFAULT_SURFACE = 'torus';
 // Run parameters with a form field of the same id; those with `requires` show only when the core supports them.
 const FORM_PARAMS = PARAMETERS.filter((p) => $(p.name));
