@@ -54,6 +54,13 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--solver', 'magic'], /solver must be/],
     [['run', '--param', 'R'], /NAME=VALUE/],
     [['frobnicate'], /unknown command/],
+    [['run', '--method', 'random'], /method must be/],
+    [['run', '--field', 'sideways'], /sideways/],
+    [['run', '--lower-bound', '5'], /lowerBound must be in \[0, 2\]/],
+    [['run', '--format', 'dxf', '--out', join(dir, 'x.dxf')], /--format must be obj, ply or json/],
+    [['run', '--mesh', join(dir, 'missing.stl')], /cannot open .*missing\.stl/],
+    [['run', '--method', 'subdivision', '--surface', 'torus'], /control mesh/],
+    [['triangulate', '--surface', 'teapot'], /unknown surface 'teapot'/],
     [['curvature', '--mesh', join(dir, 'missing.obj'), '--out', join(dir, 'c.csv')], /missing\.obj/],
   ];
   for (const [args, pattern] of cases) {
