@@ -86,27 +86,6 @@ TriMesh uploadedMesh(const MeshInput& in) {
   return readMeshBytes(in.bytes.data(), in.bytes.size(), in.format, in.name.empty() ? "mesh" : in.name);
 }
 
-// Area of the surface, for the cell size that gives a wanted face count.
-double surfaceArea(const Surface& surface) {
-  if (const auto* m = dynamic_cast<const MeshSurface*>(&surface)) {
-    double area = 0;
-    const TriMesh& T = m->mesh();
-    for (int f = 0; f < T.F.rows(); ++f)
-      area += 0.5 * (T.V.row(T.F(f, 1)) - T.V.row(T.F(f, 0))).cross(T.V.row(T.F(f, 2)) - T.V.row(T.F(f, 0))).norm();
-    return area;
-  }
-  const auto& p = dynamic_cast<const ParametricSurface&>(surface);
-  const auto d = p.domain();
-  constexpr int n = 64;  // midpoint rule on the parameter domain
-  double area = 0;
-  for (int i = 0; i < n; ++i)
-    for (int k = 0; k < n; ++k) {
-      const auto j = p.jet(d.u0 + (d.u1 - d.u0) * (i + 0.5) / n, d.v0 + (d.v1 - d.v0) * (k + 0.5) / n);
-      area += j.Pu.cross(j.Pv).norm();
-    }
-  return area * (d.u1 - d.u0) * (d.v1 - d.v0) / (n * n);
-}
-
 }  // namespace
 
 void validate(const PipelineParams& p) {
@@ -163,9 +142,9 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
   params.method = resolveMethod(given);
   TriangulationStage t;
   t.method = params.method;
-  auto checkCell = [&](double area) {
-    const double cell = params.cell > 0 ? params.cell : std::sqrt(area / (params.faces * std::sqrt(3.0) / 2.0));
-    const double expected = area / (cell * cell * std::sqrt(3.0) / 2.0);
+  auto checkCell = [&](const Surface& surface) {
+    const double cell = params.cell > 0 ? params.cell : cellForFaceCount(surface, params.faces);
+    const double expected = std::pow(cellForFaceCount(surface, 1) / cell, 2);
     if (expected > kMaxFaces)
       throw Error(ErrorCode::InvalidParameter, "cell " + number(cell) + " would give about " + number(std::round(expected)) +
                                                    " faces, more than the limit of " + std::to_string(kMaxFaces));
@@ -182,7 +161,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
     } else {
       t.surface = makeSurface(params.surface, params.surfaceParams);
     }
-    const double cell = checkCell(surfaceArea(*t.surface));
+    const double cell = checkCell(*t.surface);
     if (params.method == TriangulationMethod::Lattice) {
       t.triangulation = latticeTriangulation(dynamic_cast<const ParametricSurface&>(*t.surface), cell);
     } else {

@@ -9,6 +9,7 @@
 #include "phex/duality.hpp"
 #include "phex/error.hpp"
 #include "phex/ideal_triangle.hpp"
+#include "phex/mesh_surface.hpp"
 #include "phex/metrics.hpp"
 
 namespace phex {
@@ -52,10 +53,29 @@ void zipRows(const std::vector<int>& a, const std::vector<double>& ua, const std
 
 }  // namespace
 
-double cellForFaceCount(const ParametricSurface& surface, int faces) {
-  const Eigen::Vector2d L = meanCurveLengths(surface);
+double surfaceArea(const Surface& surface) {
+  if (const auto* m = dynamic_cast<const MeshSurface*>(&surface)) {
+    double area = 0;
+    const TriMesh& T = m->mesh();
+    for (int f = 0; f < T.F.rows(); ++f)
+      area += 0.5 * (T.V.row(T.F(f, 1)) - T.V.row(T.F(f, 0))).cross(T.V.row(T.F(f, 2)) - T.V.row(T.F(f, 0))).norm();
+    return area;
+  }
+  const auto& p = dynamic_cast<const ParametricSurface&>(surface);
+  const auto d = p.domain();
+  constexpr int n = 64;  // midpoint rule on the parameter domain
+  double area = 0;
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < n; ++k) {
+      const auto j = p.jet(d.u0 + (d.u1 - d.u0) * (i + 0.5) / n, d.v0 + (d.v1 - d.v0) * (k + 0.5) / n);
+      area += j.Pu.cross(j.Pv).norm();
+    }
+  return area * (d.u1 - d.u0) * (d.v1 - d.v0) / (n * n);
+}
+
+double cellForFaceCount(const Surface& surface, int faces) {
   // Each vertex of a regular triangulation with edge h owns an area of sqrt(3)/2 h^2.
-  return std::sqrt(L.x() * L.y() / (std::max(faces, 1) * std::sqrt(3.0) / 2.0));
+  return std::sqrt(surfaceArea(surface) / (std::max(faces, 1) * std::sqrt(3.0) / 2.0));
 }
 
 namespace {

@@ -19,8 +19,11 @@ struct Triangulation {
 // The local geometry at every vertex: exact from `uv` on a parametric surface, else from closestPoint.
 std::vector<LocalGeometry> vertexGeometry(const Triangulation& triangulation, const Surface& surface);
 
-// Edge length that gives about `faces` hexagons (one per interior vertex) on the surface.
-double cellForFaceCount(const ParametricSurface& surface, int faces);
+// Area of a surface: the sum of its triangles for an uploaded mesh, a 64 x 64 midpoint rule over the
+// parameter domain for an analytic surface.
+double surfaceArea(const Surface& surface);
+// Edge length that gives about `faces` hexagons (one per vertex) on the surface.
+double cellForFaceCount(const Surface& surface, int faces);
 
 // Which parameter lines the rows of a lattice follow.
 enum class LatticeRows {
