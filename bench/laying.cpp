@@ -8,6 +8,7 @@
 
 #include "phex/error.hpp"
 #include "phex/laying.hpp"
+#include "phex/triangulation.hpp"
 #include "phex/mesh_surface.hpp"
 #include "phex/surfaces.hpp"
 
@@ -16,9 +17,6 @@ namespace {
 double millisecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
-
-// Edge length that lays about `triangles` triangles on an area (two triangles per vertex of sqrt(3)/2 h^2).
-double cellFor(double area, double triangles) { return std::sqrt(4 * area / (std::sqrt(3.0) * triangles)); }
 
 void lay(const char* label, const phex::Surface& surface, phex::LayingOptions options) {
   const auto start = std::chrono::steady_clock::now();
@@ -36,37 +34,25 @@ void lay(const char* label, const phex::Surface& surface, phex::LayingOptions op
 
 int main(int argc, char** argv) {
   const double scale = argc > 1 ? std::atof(argv[1]) : 1.0;
-  const double pi = 3.141592653589793;
   const phex::ParametricSurfacePtr torus = phex::makeSurface("torus");  // R = 1, r = 0.4
-  const double area = 4 * pi * pi * 1.0 * 0.4;
+  // Triangle counts: two triangles per vertex of a regular triangulation.
+  auto cellForTriangles = [&](double triangles) { return phex::cellForFaceCount(*torus, static_cast<int>(triangles / 2)); };
 
   phex::LayingOptions o;
   o.start = phex::Vec3(0.87, 0, 0.38);
-  o.cell = cellFor(area, 100000 * scale);
+  o.cell = cellForTriangles(100000 * scale);
   o.method = phex::LayingMethod::Progressive;
   lay("analytic torus, progressive (Method 1)", *torus, o);
   o.method = phex::LayingMethod::Prespecified;
   lay("analytic torus, prespecified (Method 2)", *torus, o);
 
-  // The uploaded mesh: the torus sampled as a 200k-triangle grid.
-  // nu around the ring, nv around the tube, in the ratio of the radii: nu nv = 100000 scale squares.
-  const int nu = static_cast<int>(std::lround(std::sqrt(100000 * scale * 2.5))), nv = static_cast<int>(std::lround(100000 * scale / nu));
-  phex::TriMesh m;
-  m.V.resize(nu * nv, 3);
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) m.V.row(i * nv + j) = torus->position(2 * pi * i / nu, -pi + 2 * pi * j / nv).transpose();
-  m.F.resize(2 * nu * nv, 3);
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      const int a = i * nv + j, b = ((i + 1) % nu) * nv + j, c = ((i + 1) % nu) * nv + (j + 1) % nv, d = i * nv + (j + 1) % nv;
-      m.F.row(2 * (i * nv + j)) << a, b, c;
-      m.F.row(2 * (i * nv + j) + 1) << a, c, d;
-    }
+  // The uploaded mesh: the torus sampled as a 200k-triangle lattice (100000 scale vertices).
+  const phex::TriMesh m = phex::latticeTriangulation(*torus, cellForTriangles(200000 * scale)).mesh;
   auto start = std::chrono::steady_clock::now();
   const phex::MeshSurface mesh(m, "sampled torus");
   std::printf("MeshSurface of %d triangles built (curvature, tree) in %.1f ms\n", static_cast<int>(m.F.rows()),
               millisecondsSince(start));
-  o.cell = cellFor(area, 200000 * scale);
+  o.cell = cellForTriangles(200000 * scale);
   o.method = phex::LayingMethod::Progressive;
   lay("uploaded mesh, progressive (Method 1)", mesh, o);
   o.method = phex::LayingMethod::Prespecified;
