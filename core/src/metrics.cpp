@@ -42,18 +42,24 @@ FacePlane leastSquaresPlane(const PolyMesh& mesh, int face) {
   return {c, es.eigenvectors().col(0)};
 }
 
-double facePlanarity(const PolyMesh& mesh, int face) {
+namespace {
+
+// Largest corner distance from `plane` over the face's mean edge length.
+double planarityAgainst(const PolyMesh& mesh, int face, const FacePlane& plane) {
   const int n = mesh.faceSize(face);
   if (n <= 3) return 0.0;
   const int* ids = mesh.face(face);
-  const FacePlane pl = leastSquaresPlane(mesh, face);
   double maxDist = 0, edges = 0;
   for (int i = 0; i < n; ++i) {
-    maxDist = std::max(maxDist, std::abs(pl.normal.dot(mesh.vertex(ids[i]) - pl.centroid)));
+    maxDist = std::max(maxDist, std::abs(plane.normal.dot(mesh.vertex(ids[i]) - plane.centroid)));
     edges += (mesh.vertex(ids[i]) - mesh.vertex(ids[(i + 1) % n])).norm();
   }
   return edges > 0 ? maxDist / (edges / n) : 0.0;
 }
+
+}  // namespace
+
+double facePlanarity(const PolyMesh& mesh, int face) { return planarityAgainst(mesh, face, leastSquaresPlane(mesh, face)); }
 
 bool polygonSelfIntersects(const std::vector<Vec2>& p) {
   const int n = static_cast<int>(p.size());
@@ -71,12 +77,11 @@ bool polygonSelfIntersects(const std::vector<Vec2>& p) {
 
 namespace {
 
-// The face's corners in its least-squares plane, centred at their centroid; counterclockwise when the face's
-// orientation agrees with `up` (the plane's normal is turned towards it).
-std::vector<Vec2> planarCorners(const PolyMesh& mesh, int face) {
+// The face's corners in its least-squares plane `pl`, centred at their centroid, counterclockwise in the
+// face's own orientation (the plane's normal is turned like the face's vector area).
+std::vector<Vec2> planarCorners(const PolyMesh& mesh, int face, const FacePlane& pl) {
   const int n = mesh.faceSize(face);
   const int* ids = mesh.face(face);
-  const FacePlane pl = leastSquaresPlane(mesh, face);
   Vec3 normal = pl.normal;
   Vec3 area = Vec3::Zero();  // the face's vector area orients the plane like the face
   for (int i = 0; i < n; ++i) area += mesh.vertex(ids[i]).cross(mesh.vertex(ids[(i + 1) % n]));
@@ -106,7 +111,9 @@ bool isConvex(const std::vector<Vec2>& p) {
 
 }  // namespace
 
-bool faceSelfIntersects(const PolyMesh& mesh, int face) { return polygonSelfIntersects(planarCorners(mesh, face)); }
+bool faceSelfIntersects(const PolyMesh& mesh, int face) {
+  return polygonSelfIntersects(planarCorners(mesh, face, leastSquaresPlane(mesh, face)));
+}
 
 double facePlanarityDiagonals(const PolyMesh& mesh, int face) {
   const int n = mesh.faceSize(face);
@@ -152,7 +159,11 @@ double affineRegularityDefect(const std::vector<Vec2>& u, bool quasiRegular) {
   return std::isfinite(best) ? best : -1.0;
 }
 
-MeshMetrics measure(const PolyMesh& mesh) {
+namespace {
+
+// Every measure in one pass over the faces, each face's least-squares plane fitted once; the curvature and
+// distance measures only when a surface is given.
+MeshMetrics measureAll(const PolyMesh& mesh, const Surface* surface) {
   MeshMetrics m;
   m.vertexCount = static_cast<int>(mesh.V.rows());
   m.faceCount = mesh.faceCount();
@@ -161,13 +172,19 @@ MeshMetrics measure(const PolyMesh& mesh) {
   m.selfIntersecting.resize(m.faceCount);
   m.convex.resize(m.faceCount);
   m.faceArea.resize(m.faceCount);
-  double sum = 0, edgeSum = 0, areaSum = 0;
+  if (surface) {
+    m.convexityMismatch.assign(m.faceCount, 0);
+    m.regularity.assign(m.faceCount, -1.0);
+  }
+  double sum = 0, edgeSum = 0, areaSum = 0, regularitySum = 0;
   long edges = 0;
+  int regularityCount = 0;
   m.edgeLengthMin = m.faceAreaMin = std::numeric_limits<double>::infinity();
   std::vector<int> facesAtVertex(m.vertexCount, 0);
   for (int f = 0; f < m.faceCount; ++f) {
-    const std::vector<Vec2> corners = planarCorners(mesh, f);
-    m.planarity[f] = facePlanarity(mesh, f);
+    const FacePlane plane = leastSquaresPlane(mesh, f);
+    const std::vector<Vec2> corners = planarCorners(mesh, f, plane);
+    m.planarity[f] = planarityAgainst(mesh, f, plane);
     m.planarityDiagonals[f] = facePlanarityDiagonals(mesh, f);
     m.selfIntersecting[f] = polygonSelfIntersects(corners) ? 1 : 0;
     m.convex[f] = isConvex(corners) ? 1 : 0;
@@ -188,47 +205,43 @@ MeshMetrics measure(const PolyMesh& mesh) {
     m.planarityMax = std::max(m.planarityMax, m.planarity[f]);
     sum += m.planarity[f];
     m.selfIntersectingCount += m.selfIntersecting[f];
-  }
-  m.planarityMean = m.faceCount ? sum / m.faceCount : 0.0;
-  m.edgeLengthMean = edges ? edgeSum / edges : 0.0;
-  m.faceAreaMean = m.faceCount ? areaSum / m.faceCount : 0.0;
-  if (!edges) m.edgeLengthMin = 0;
-  if (!m.faceCount) m.faceAreaMin = 0;
-  for (int c : facesAtVertex) m.vertexValence[c]++;
-  return m;
-}
-
-MeshMetrics measure(const PolyMesh& mesh, const Surface& surface) {
-  MeshMetrics m = measure(mesh);
-  m.convexityMismatch.assign(m.faceCount, 0);
-  m.regularity.assign(m.faceCount, -1.0);
-  double regularitySum = 0;
-  int regularityCount = 0;
-  for (int f = 0; f < m.faceCount; ++f) {
-    Vec3 centre = Vec3::Zero();
-    for (int i = 0; i < mesh.faceSize(f); ++i) centre += mesh.vertex(mesh.face(f)[i]) / mesh.faceSize(f);
-    const LocalGeometry g = surface.closestPoint(centre);
+    if (!surface) continue;
+    const LocalGeometry g = surface->closestPoint(plane.centroid);
     const double h = std::sqrt(m.faceArea[f]);
     // Parabolic at the face's scale: the indicatrix says nothing about its shape (§3).
     if (std::abs(g.k2) * h < 1e-3 || std::abs(g.k1) * h < 1e-3) continue;
     const bool elliptic = g.gaussianCurvature() > 0;
     m.convexityMismatch[f] = (m.convex[f] != 0) != elliptic && !m.selfIntersecting[f];
     m.convexityMismatchCount += m.convexityMismatch[f];
-    m.regularity[f] = affineRegularityDefect(planarCorners(mesh, f), !elliptic);
+    m.regularity[f] = affineRegularityDefect(corners, !elliptic);
     if (m.regularity[f] >= 0) regularitySum += m.regularity[f], ++regularityCount;
   }
+  m.planarityMean = m.faceCount ? sum / m.faceCount : 0.0;
+  m.edgeLengthMean = edges ? edgeSum / edges : 0.0;
+  m.faceAreaMean = m.faceCount ? areaSum / m.faceCount : 0.0;
   m.regularityMean = regularityCount ? regularitySum / regularityCount : 0.0;
-  const double diagonal = surface.bounds().diagonal().norm();
+  if (!edges) m.edgeLengthMin = 0;
+  if (!m.faceCount) m.faceAreaMin = 0;
+  for (int c : facesAtVertex) m.vertexValence[c]++;
+  if (!surface) return m;
+
+  const double diagonal = surface->bounds().diagonal().norm();
   m.surfaceDistance.resize(m.vertexCount);
-  double sum = 0;
+  double distanceSum = 0;
   for (int v = 0; v < m.vertexCount; ++v) {
     const Vec3 p = mesh.vertex(v);
-    m.surfaceDistance[v] = (surface.closestPoint(p).point - p).norm() / diagonal;
+    m.surfaceDistance[v] = (surface->closestPoint(p).point - p).norm() / diagonal;
     m.surfaceDistanceMax = std::max(m.surfaceDistanceMax, m.surfaceDistance[v]);
-    sum += m.surfaceDistance[v];
+    distanceSum += m.surfaceDistance[v];
   }
-  m.surfaceDistanceMean = m.vertexCount ? sum / m.vertexCount : 0.0;
+  m.surfaceDistanceMean = m.vertexCount ? distanceSum / m.vertexCount : 0.0;
   return m;
 }
+
+}  // namespace
+
+MeshMetrics measure(const PolyMesh& mesh) { return measureAll(mesh, nullptr); }
+
+MeshMetrics measure(const PolyMesh& mesh, const Surface& surface) { return measureAll(mesh, &surface); }
 
 }  // namespace phex
