@@ -1,7 +1,7 @@
 // phex web app: designs P-Hex meshes with the phex library (in a worker) and shows them with three.js.
 import { createPHex, MESH_FORMATS, meshToOBJ, meshToPLY, PARAMETERS } from 'phex';
 import { CURVATURE_MODES, curvatureColoring, FACE_MODES, faceColoring, faceQuantities, fmt } from './coloring.js';
-import { PRESETS, presetParams } from './presets.js';
+import { PRESETS } from './presets.js';
 import { Viewer } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
@@ -87,13 +87,12 @@ function buildForm() {
   if (curvature.disabled) curvature.textContent += ' (needs a newer phex core)';
 
   const figures = $('figure-presets');
-  for (const [label, preset] of Object.entries(PRESETS)) {
+  for (const label of Object.keys(PRESETS)) {
     const button = document.createElement('button');
     button.type = 'button';
     button.textContent = label;
     button.dataset.preset = label;
-    const { missing } = presetParams(preset, capabilities);
-    button.title = missing.length ? `Not yet in this core build: ${missing.join(', ')}` : 'Compute this design';
+    button.title = 'Compute this design';
     button.addEventListener('click', () => applyPreset(label));
     figures.append(button);
   }
@@ -336,12 +335,8 @@ function scheduleRun() {
 }
 
 function applyPreset(label) {
-  const { params, missing } = presetParams(PRESETS[label], capabilities);
-  const note = $('preset-note');
-  note.hidden = missing.length === 0;
-  note.textContent = missing.length ? `${label}: computed without ${missing.join(', ')} (not yet in this core build).` : '';
   setUpload(null);
-  writeForm(params);
+  writeForm(structuredClone(PRESETS[label].params));
   if (PRESETS[label].view?.color) $('color').value = PRESETS[label].view.color;
   lastSurfaceKey = null; // frame the new design
   compute();

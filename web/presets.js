@@ -1,11 +1,8 @@
-// phex web app — one-click designs after the paper's figures.
-// `params` holds what the library accepts today. `pending` holds the parameters the figure really needs
-// (triangulation method, direction field, §5.3 step lower bound) that the core is gaining: the app adds
-// each of them as soon as phex.capabilities() lists it, and says which ones it had to leave out.
+// phex web app — one-click designs after the paper's figures: the run parameters of each (surface,
+// triangulation method, direction field, §5.3 lower bound) and, optionally, the colouring to show.
 export const PRESETS = {
   'Fig. 1 cyclide, progressive conjugation': {
-    params: { surface: 'cyclide', faces: 2500 },
-    pending: { method: 'progressive' },
+    params: { surface: 'cyclide', faces: 2500, method: 'progressive' },
   },
   'Fig. 3 torus: convex and non-convex faces': {
     params: { surface: 'torus', surfaceParams: { R: 1, r: 0.45 }, faces: 600 },
@@ -15,70 +12,39 @@ export const PRESETS = {
     params: { surface: 'hyperboloid', faces: 1500 },
   },
   'Fig. 15 cyclide patch, progressive': {
-    params: { surface: 'cyclide', surfaceParams: { uSpan: 180, vSpan: 200 }, faces: 1500 },
-    pending: { method: 'progressive' },
+    params: { surface: 'cyclide', surfaceParams: { uSpan: 180, vSpan: 200 }, faces: 1500, method: 'progressive' },
   },
   'Fig. 15 cyclide patch, pre-specified': {
-    params: { surface: 'cyclide', surfaceParams: { uSpan: 180, vSpan: 200 }, faces: 1500 },
-    pending: { method: 'prespecified', field: 'principal' },
+    params: { surface: 'cyclide', surfaceParams: { uSpan: 180, vSpan: 200 }, faces: 1500, method: 'prespecified', field: 'principal' },
   },
   'Fig. 18 vase, step control bottom up': {
-    params: { surface: 'vase', faces: 2000 },
-    pending: { method: 'progressive', lowerBound: 0.3 },
+    params: { surface: 'vase', faces: 2000, method: 'progressive', lowerBound: 0.3 },
   },
   'Fig. 18 vase, longitudinal': {
-    params: { surface: 'vase', faces: 2000 },
-    pending: { method: 'prespecified', field: 'angle:90' },
+    params: { surface: 'vase', faces: 2000, method: 'prespecified', field: 'angle:90' },
   },
   'Fig. 19 torus without lower bound': {
-    params: { surface: 'torus', faces: 2000 },
-    pending: { method: 'progressive', lowerBound: 0 },
+    params: { surface: 'torus', faces: 2000, method: 'progressive', lowerBound: 0 },
   },
   'Fig. 19 torus with lower bound': {
-    params: { surface: 'torus', faces: 2000 },
-    pending: { method: 'progressive', lowerBound: 0.5 },
+    params: { surface: 'torus', faces: 2000, method: 'progressive', lowerBound: 0.5 },
   },
   'Fig. 20 sphere, radial': {
-    params: { surface: 'sphere', faces: 1500 },
-    pending: { method: 'prespecified', field: 'radial' },
+    params: { surface: 'sphere', faces: 1500, method: 'prespecified', field: 'radial' },
   },
   'Fig. 20 sphere, diverging': {
-    params: { surface: 'sphere', faces: 1500 },
-    pending: { method: 'prespecified', field: 'diverging' },
+    params: { surface: 'sphere', faces: 1500, method: 'prespecified', field: 'diverging' },
   },
   'Fig. 20 sphere, spiral': {
-    params: { surface: 'sphere', faces: 1500 },
-    pending: { method: 'prespecified', field: 'spiral' },
+    params: { surface: 'sphere', faces: 1500, method: 'prespecified', field: 'spiral' },
   },
   'Fig. 21 minimal surface (Enneper)': {
-    params: { surface: 'enneper', faces: 1500 },
-    pending: { method: 'prespecified', field: 'principal' },
+    params: { surface: 'enneper', faces: 1500, method: 'prespecified', field: 'principal' },
   },
   'Fig. 21 convex mesh by Loop subdivision': {
-    params: { surface: 'egg', faces: 1000 },
-    pending: { method: 'subdivision' },
+    params: { surface: 'egg', faces: 1000, method: 'subdivision' },
   },
   'Fig. 22 free-form, pre-specified': {
-    params: { surface: 'freeform', faces: 2500 },
-    pending: { method: 'prespecified', field: 'principal' },
+    params: { surface: 'freeform', faces: 2500, method: 'prespecified', field: 'principal' },
   },
 };
-
-/**
- * The run parameters of a preset for a core with `capabilities`, and the pending ones left out.
- * A pending parameter is kept when the core lists its value (methods, fields) or supports it at all.
- */
-export function presetParams(preset, capabilities) {
-  const params = structuredClone(preset.params);
-  const missing = [];
-  for (const [name, value] of Object.entries(preset.pending ?? {})) {
-    const supported =
-      name === 'method' ? capabilities.methods.includes(value)
-      : name === 'field' ? capabilities.fields.some((f) => f === value || f === value.split(':')[0] || (f === 'angle:DEG' && value.startsWith('angle:')))
-      : name === 'lowerBound' ? capabilities.lowerBound
-      : false;
-    if (supported) params[name] = value;
-    else missing.push(`${name}: ${value}`);
-  }
-  return { params, missing };
-}
