@@ -181,6 +181,25 @@ MeshMetrics measureAll(const PolyMesh& mesh, const Surface* surface) {
   int regularityCount = 0;
   m.edgeLengthMin = m.faceAreaMin = std::numeric_limits<double>::infinity();
   std::vector<int> facesAtVertex(m.vertexCount, 0);
+  // The surface at every vertex: its distance, and the sign of K there, which says whether a face lies across
+  // a parabolic curve.
+  std::vector<signed char> vertexSign;
+  if (surface) {
+    const double diagonal = surface->bounds().diagonal().norm();
+    m.surfaceDistance.resize(m.vertexCount);
+    vertexSign.resize(m.vertexCount);
+    double distanceSum = 0;
+    for (int v = 0; v < m.vertexCount; ++v) {
+      const Vec3 p = mesh.vertex(v);
+      const LocalGeometry g = surface->closestPoint(p);
+      m.surfaceDistance[v] = (g.point - p).norm() / diagonal;
+      m.surfaceDistanceMax = std::max(m.surfaceDistanceMax, m.surfaceDistance[v]);
+      distanceSum += m.surfaceDistance[v];
+      const double K = g.gaussianCurvature();
+      vertexSign[v] = static_cast<signed char>(K > 0 ? 1 : K < 0 ? -1 : 0);
+    }
+    m.surfaceDistanceMean = m.vertexCount ? distanceSum / m.vertexCount : 0.0;
+  }
   for (int f = 0; f < m.faceCount; ++f) {
     const FacePlane plane = leastSquaresPlane(mesh, f);
     const std::vector<Vec2> corners = planarCorners(mesh, f, plane);
@@ -211,30 +230,25 @@ MeshMetrics measureAll(const PolyMesh& mesh, const Surface* surface) {
     // Parabolic at the face's scale: the indicatrix says nothing about its shape (§3).
     if (std::abs(g.k2) * h < 1e-3 || std::abs(g.k1) * h < 1e-3) continue;
     const bool elliptic = g.gaussianCurvature() > 0;
+    // Across a parabolic curve (§6 step 1: the signs of K at the corners differ) neither shape is called for.
+    bool across = false;
+    for (int i = 0; i < mesh.faceSize(f); ++i) across |= vertexSign[mesh.face(f)[i]] != (elliptic ? 1 : -1);
+    if (across) {
+      ++m.parabolicFaceCount;
+      continue;
+    }
     m.convexityMismatch[f] = (m.convex[f] != 0) != elliptic && !m.selfIntersecting[f];
     m.convexityMismatchCount += m.convexityMismatch[f];
     m.regularity[f] = affineRegularityDefect(corners, !elliptic);
     if (m.regularity[f] >= 0) regularitySum += m.regularity[f], ++regularityCount;
   }
+  for (int c : facesAtVertex) m.vertexValence[c]++;
   m.planarityMean = m.faceCount ? sum / m.faceCount : 0.0;
   m.edgeLengthMean = edges ? edgeSum / edges : 0.0;
   m.faceAreaMean = m.faceCount ? areaSum / m.faceCount : 0.0;
   m.regularityMean = regularityCount ? regularitySum / regularityCount : 0.0;
   if (!edges) m.edgeLengthMin = 0;
   if (!m.faceCount) m.faceAreaMin = 0;
-  for (int c : facesAtVertex) m.vertexValence[c]++;
-  if (!surface) return m;
-
-  const double diagonal = surface->bounds().diagonal().norm();
-  m.surfaceDistance.resize(m.vertexCount);
-  double distanceSum = 0;
-  for (int v = 0; v < m.vertexCount; ++v) {
-    const Vec3 p = mesh.vertex(v);
-    m.surfaceDistance[v] = (surface->closestPoint(p).point - p).norm() / diagonal;
-    m.surfaceDistanceMax = std::max(m.surfaceDistanceMax, m.surfaceDistance[v]);
-    distanceSum += m.surfaceDistance[v];
-  }
-  m.surfaceDistanceMean = m.vertexCount ? distanceSum / m.vertexCount : 0.0;
   return m;
 }
 

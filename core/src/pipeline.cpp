@@ -136,12 +136,22 @@ TriangulationMethod resolveMethod(const PipelineParams& params) {
   return TriangulationMethod::Progressive;  // makeSurface names the unknown surface
 }
 
+std::string resolveField(const PipelineParams& params) {
+  if (params.method != TriangulationMethod::Auto || params.mesh || params.field != "principal") return params.field;
+  for (const SurfaceSpec& s : analyticSurfaces())
+    if (s.name == params.surface) return s.field;
+  return params.field;
+}
+
 TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel) {
   validate(given);
   PipelineParams params = given;
   params.method = resolveMethod(given);
+  params.field = resolveField(given);
   TriangulationStage t;
   t.method = params.method;
+  if (params.method == TriangulationMethod::Progressive || params.method == TriangulationMethod::Prespecified)
+    t.field = params.field;
   auto checkCell = [&](const Surface& surface) {
     const double cell = params.cell > 0 ? params.cell : cellForFaceCount(surface, params.faces);
     const double expected = std::pow(cellForFaceCount(surface, 1) / cell, 2);
@@ -197,6 +207,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   report("triangulate", 0, "laying the triangulation");
   TriangulationStage stage = triangulate(params, progress, cancel);
   r.method = stage.method;
+  r.field = stage.field;
   r.surface = std::move(stage.surface);
   r.triangulation = std::move(stage.triangulation);
   r.check = std::move(stage.check);

@@ -357,21 +357,38 @@ const std::vector<Entry>& registry() {
 const std::vector<SurfaceSpec>& analyticSurfaces() {
   // The method that suits each surface: Method 2 along principal lines where the curvature lines form a
   // regular net (§7), Method 1 on the helicoid, the ruling-aligned lattice on developables (§3) and the
-  // plane, the parameter lattice where the parameter lines are the curvature lines and close up exactly
-  // (torus, ring cyclide, ellipsoid: all hexagons, no seam).
-  static const std::map<std::string, std::string> recommended = {
-      {"torus", "lattice"},          {"sphere", "prespecified"},          {"ellipsoid", "lattice"},
-      {"cyclide", "lattice"},            {"vase", "prespecified"},            {"hyperboloid", "prespecified"},
-      {"elliptic-paraboloid", "prespecified"}, {"hyperbolic-paraboloid", "prespecified"},
-      {"freeform", "prespecified"},      {"enneper", "prespecified"},         {"catenoid", "prespecified"},
-      {"helicoid", "progressive"},       {"cylinder", "lattice"},             {"cone", "lattice"},
-      {"plane", "lattice"}};
+  // plane, the parameter lattice where the parameter lines are the curvature lines (torus, ring cyclide,
+  // ellipsoid, Enneper: all hexagons, no seam). The elliptic paraboloid's principal field has two umbilics
+  // inside the patch, where Method 2 breaks down; its parameter lines are conjugate (z_xy = 0) and umbilic-free.
+  struct Choice {
+    const char* method;
+    const char* field;
+  };
+  static const std::map<std::string, Choice> recommended = {
+      {"torus", {"lattice", "principal"}},
+      {"sphere", {"prespecified", "principal"}},
+      {"ellipsoid", {"lattice", "principal"}},
+      {"cyclide", {"lattice", "principal"}},
+      {"vase", {"prespecified", "principal"}},
+      {"hyperboloid", {"prespecified", "principal"}},
+      {"elliptic-paraboloid", {"prespecified", "param"}},
+      {"hyperbolic-paraboloid", {"prespecified", "principal"}},
+      {"freeform", {"prespecified", "principal"}},
+      {"enneper", {"lattice", "principal"}},
+      {"catenoid", {"prespecified", "principal"}},
+      {"helicoid", {"progressive", "principal"}},
+      {"cylinder", {"lattice", "principal"}},
+      {"cone", {"lattice", "principal"}},
+      {"plane", {"lattice", "principal"}}};
   static const std::vector<SurfaceSpec> specs = [] {
     std::vector<SurfaceSpec> s;
     for (const Entry& e : registry()) {
       s.push_back(e.spec);
       const auto it = recommended.find(e.spec.name);
-      if (it != recommended.end()) s.back().method = it->second;
+      if (it != recommended.end()) {
+        s.back().method = it->second.method;
+        s.back().field = it->second.field;
+      }
     }
     return s;
   }();

@@ -224,7 +224,15 @@ TriangulationCheck checkTriangulation(const Triangulation& t, const Surface& sur
     // symmetric star in the vertex's tangent plane (vertical projection, §4.1).
     const LocalGeometry& g = geo[v];
     const PointType type = classify(g, 1e-6, c.edgeMean);
-    if (type == PointType::Parabolic || type == PointType::Planar) {
+    // A star across a parabolic curve (a neighbour where K has the other sign or vanishes: §6 step 1) has no
+    // single indicatrix to be judged by: the curvature its edges span changes in kind.
+    bool across = type == PointType::Parabolic || type == PointType::Planar;
+    for (int f : rings.triangles[v])
+      for (int k = 0; k < 3 && !across; ++k) {
+        const PointType other = classify(geo[T.F(f, k)], 1e-6, c.edgeMean);
+        across = other != type;
+      }
+    if (across) {
       c.parabolicStars.push_back(v);
       continue;
     }

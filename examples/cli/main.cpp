@@ -41,8 +41,8 @@ Options of `phex run`:
                             `phex surfaces`; prespecified for uploaded meshes), progressive (§5.2
                             Method 1), prespecified (Method 2, along --field), subdivision (§7, closed
                             convex surfaces) or lattice (parameter rows; analytic surfaces only)
-  --field SPEC              direction field: principal (default), angle:DEG, param, radial,
-                            diverging[:DEG], spiral[:DEG]
+  --field SPEC              direction field: principal (default; under --method auto the surface's
+                            recommended field), angle:DEG, param, radial, diverging[:DEG], spiral[:DEG]
   --lower-bound B           §5.3 lower bound on the step ratio |CM|/|AB|, 0..2 (default 0.3; 0 off)
   --faces N                 wanted number of hexagons, 12..1000000 (default 2000)
   --cell H                  wanted edge length of the triangulation instead of --faces
@@ -150,12 +150,14 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"params", params},
           {"triangulation", triangulationJson(r.triangulation, r.check)},
           {"methodUsed", phex::triangulationMethodName(r.method)},
+          {"fieldUsed", r.field},
           {"mesh", {{"vertices", r.metrics.vertexCount}, {"faces", r.metrics.faceCount}, {"facesBySize", bySize}}},
           {"planarity", {{"max", r.metrics.planarityMax}, {"mean", r.metrics.planarityMean},
                          {"initialMax", r.solve.initialPlanarityMax}}},
           {"invalidFaces", r.metrics.selfIntersectingCount},
           {"boundaryFaces", std::count(r.dual.boundaryFace.begin(), r.dual.boundaryFace.end(), 1)},
           {"convexityMismatches", r.metrics.convexityMismatchCount},
+          {"parabolicFaces", r.metrics.parabolicFaceCount},
           {"regularityMean", r.metrics.regularityMean},
           {"planarityDiagonalsMaxPercent", *std::max_element(r.metrics.planarityDiagonals.begin(), r.metrics.planarityDiagonals.end())},
           {"edgeLength", {{"min", r.metrics.edgeLengthMin}, {"max", r.metrics.edgeLengthMax}, {"mean", r.metrics.edgeLengthMean}}},
@@ -244,6 +246,8 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     if (!out.empty()) phex::writeTextFile(out, phex::toObj(t.triangulation.mesh));
     json rep = triangulationJson(t.triangulation, t.check);
+    rep["methodUsed"] = phex::triangulationMethodName(t.method);
+    rep["fieldUsed"] = t.field;
     rep["milliseconds"] = ms;
     if (!reportPath.empty()) phex::writeTextFile(reportPath, rep.dump(2) + "\n");
     std::cout << "triangles " << t.triangulation.mesh.F.rows() << ", interior valence 6 " << t.check.regularFraction * 100
@@ -304,7 +308,8 @@ int curvature(const std::vector<std::string>& args) {
 
 int surfaces() {
   for (const auto& s : phex::analyticSurfaces()) {
-    std::cout << s.name << " — " << s.description << " (method auto: " << s.method << ")\n";
+    std::cout << s.name << " — " << s.description << " (method auto: " << s.method
+              << (s.method == "prespecified" || s.method == "progressive" ? ", field " + s.field : std::string()) << ")\n";
     for (const auto& prm : s.parameters)
       std::cout << "    " << prm.name << " = " << prm.defaultValue << "  [" << prm.min << ", " << prm.max << "]  "
                 << prm.description << "\n";

@@ -57,14 +57,15 @@ bool hasNote(const Triangulation& t, const std::string& text) {
                   << q.selfIntersecting << ", edges " << q.edgeMin << " .. " << q.edgeMax << " cell")
 
 // The properties every figure test asks for: >= 95 % valence 6, no invalid star away from parabolic curves
-// (or at most the measured fraction `invalidAllowed`, a known shortfall reported where it is passed), edges
-// within the band [edgeLow, edgeHigh] of the cell.
-void checkFigure(const Quality& q, double edgeLow, double edgeHigh, double invalidAllowed = 0) {
+// (or at most the measured fraction `invalidAllowed`, a known shortfall reported where it is passed), no
+// self-intersecting dual face (or at most `selfIntersectingAllowed`), edges within [edgeLow, edgeHigh] cells.
+void checkFigure(const Quality& q, double edgeLow, double edgeHigh, double invalidAllowed = 0,
+                 double selfIntersectingAllowed = 0) {
   REPORT(q);
   CHECK(q.check.interiorVertices > 100);
   CHECK(q.check.regularFraction >= 0.95);
   CHECK(q.invalid <= invalidAllowed * q.check.interiorVertices);
-  CHECK(q.selfIntersecting <= invalidAllowed * q.check.interiorVertices);
+  CHECK(q.selfIntersecting <= selfIntersectingAllowed * q.check.interiorVertices);
   CHECK(q.edgeMin >= edgeLow);
   CHECK(q.edgeMax <= edgeHigh);
 }
@@ -172,15 +173,15 @@ TEST_CASE("laying: a cylinder is tiled along its rulings and closes around (§5.
 
 TEST_CASE("laying: sphere patterns radial, diverging and spiral (Fig. 20)") {
   const ParametricSurfacePtr s = makeSurface("sphere");
-  // Known shortfall: diverging has ~5 % invalid stars where its rows reach the band's rims at a slant and
-  // the fronts meet; spiral 2 self-intersecting dual faces.
-  for (const auto& [field, invalidAllowed] : {std::pair<const char*, double>{"radial", 0.0}, {"diverging", 0.055},
-                                              {"spiral", 0.005}}) {
+  // Known shortfall: diverging keeps 1 invalid star of 712 and 2 self-intersecting dual faces where its
+  // rows reach the band's rims at a slant and the fronts meet (35 invalid stars before the star repair).
+  for (const auto& [field, allowed] : {std::pair<const char*, double>{"radial", 0.0}, {"diverging", 0.004},
+                                       {"spiral", 0.0}}) {
     INFO(field);
     LayingOptions o = options(0.1, LayingMethod::Prespecified, field);
     o.base = BaseFamily::First;  // base curves along the pattern's lines; layers go around and close
     const Triangulation t = layTriangulation(*s, o);
-    checkFigure(quality(t, *s, 0.1), 0.4, 3.0, invalidAllowed);
+    checkFigure(quality(t, *s, 0.1), 0.4, 3.0, allowed, allowed);
     CHECK(t.fieldLines.size() > 2);
   }
 }
@@ -208,7 +209,7 @@ TEST_CASE("laying: torus without and with the §5.3 lower bound (Fig. 19)") {
   CHECK(boundedRatio > 0.3);
   CHECK(hasNote(bounded, "lower bound"));
   const Quality q = quality(bounded, *s, 0.1);
-  checkFigure(q, 0.3, 2.0, 0.005);  // known shortfall: ~0.3 % invalid stars just off the parabolic band
+  checkFigure(q, 0.3, 2.0, 0, 0.002);  // known shortfall: 3 of 2805 dual faces self-intersect
   CHECK(q.check.boundaryVertices == 0);  // closed both ways: the fronts were zipped with valence 6
   CHECK(hasNote(bounded, "valence 6 kept"));
 }
@@ -226,7 +227,7 @@ TEST_CASE("laying: vase bottom-up re-uses the step across the parabolic circle, 
   CHECK(q.edgeMin >= 0.5);
   CHECK(q.edgeMax <= 2.0);
   // Stars judged invalid sit only on the rows at the crossing, where no bounded step is above DE (§5.3).
-  CHECK(q.check.invalidStars.size() <= 0.07 * q.check.interiorVertices);
+  CHECK(q.check.invalidStars.size() == 0);
   for (int v : q.check.invalidStars) CHECK(std::abs(up.mesh.V(v, 2) - 1.5) < 0.2);
   double top = 0;
   for (int v = 0; v < up.mesh.V.rows(); ++v) top = std::max(top, up.mesh.V(v, 2));
@@ -235,7 +236,7 @@ TEST_CASE("laying: vase bottom-up re-uses the step across the parabolic circle, 
   o.start.reset();
   o.baseDirection = Vec3(0, 0, 1);  // along the meridian: layers go around and close
   const Triangulation around = layTriangulation(*s, o);
-  checkFigure(quality(around, *s, 0.1), 0.5, 2.0, 0.02);  // known shortfall: ~1.7 % invalid at the seam
+  checkFigure(quality(around, *s, 0.1), 0.5, 2.0);  // known shortfall: ~1.7 % invalid at the seam
   CHECK(hasNote(around, "lower bound"));
 }
 
@@ -276,12 +277,12 @@ TEST_CASE("laying: cyclide patch with both methods (Fig. 15)") {
   o.start = Vec3(1.2, 0, 0.3);
   checkFigure(quality(layTriangulation(*s, o), *s, 0.1), 0.3, 2.0);
   // Known shortfall of Method 1 here: its rows drift off the curvature lines in the hyperbolic part; measured
-  // ~7 % invalid stars and edges 0.06 .. 4.2 cells. What holds: regular, and valid away from that part.
+  // 6 invalid stars of 304 after the star repair (22 before) and edges 0.08 .. 4.2 cells.
   o.method = LayingMethod::Progressive;
   const Quality q = quality(layTriangulation(*s, o), *s, 0.1);
   REPORT(q);
   CHECK(q.check.regularFraction >= 0.95);
-  CHECK(q.invalid <= 0.08 * q.check.interiorVertices);
+  CHECK(q.invalid <= 0.025 * q.check.interiorVertices);
 }
 
 TEST_CASE("laying: minimal surfaces along their curvature lines (Fig. 21 left)") {
@@ -301,8 +302,9 @@ TEST_CASE("laying: free-form surface with parabolic curves (Fig. 22)") {
   LayingOptions o = options(0.1, LayingMethod::Prespecified);
   o.start = Vec3(1, -1, 0);
   const Triangulation t = layTriangulation(*s, o);
-  // Known shortfall: ~5 % invalid stars and edges up to 4.5 cells where rows meet between the bumps.
-  checkFigure(quality(t, *s, 0.1), 0.3, 4.5, 0.08);
+  // Known shortfall: 2 invalid stars of 491 (24 before the star repair), 26 self-intersecting dual faces and
+  // edges up to 4.5 cells where rows meet between the bumps and around the umbilics at their tops.
+  checkFigure(quality(t, *s, 0.1), 0.3, 4.5, 0.006, 0.06);
 }
 
 TEST_CASE("laying: an uploaded mesh (a sampled torus) is laid like the analytic torus") {
@@ -325,11 +327,11 @@ TEST_CASE("laying: an uploaded mesh (a sampled torus) is laid like the analytic 
   const Triangulation t = layTriangulation(mesh, o);
   CHECK(t.uv.empty());
   const Quality q = quality(t, mesh, 0.1);
-  // Known shortfall on the mesh (estimated curvature): ~9 % invalid stars, short and long edges near the
-  // parabolic circles, against 0.3 % on the analytic torus.
+  // Known shortfall of Method 1 on the mesh (estimated curvature): 39 invalid stars of 2215 after the star
+  // repair (207 before), short and long edges near the parabolic circles; none on the analytic torus.
   REPORT(q);
   CHECK(q.check.regularFraction >= 0.95);
-  CHECK(q.invalid <= 0.12 * q.check.interiorVertices);
+  CHECK(q.invalid <= 0.025 * q.check.interiorVertices);
   for (int v = 0; v < t.mesh.V.rows(); v += 37) {
     const Vec3 p = t.mesh.V.row(v).transpose();
     CHECK(std::abs(std::hypot(std::hypot(p.x(), p.y()) - 1.0, p.z()) - 0.4) < 2e-3);  // on the torus
@@ -339,7 +341,7 @@ TEST_CASE("laying: an uploaded mesh (a sampled torus) is laid like the analytic 
   const Quality q2 = quality(layTriangulation(mesh, o), mesh, 0.1);
   REPORT(q2);
   CHECK(q2.check.regularFraction >= 0.95);
-  CHECK(q2.invalid <= 0.12 * q2.check.interiorVertices);
+  CHECK(q2.invalid == 0);
 }
 
 TEST_CASE("laying: progress is reported and cancelling stops it") {

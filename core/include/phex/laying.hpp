@@ -48,6 +48,8 @@ struct LayingOptions {
   BaseFamily base = BaseFamily::Auto;
   // A tangent vector at the start: the base curve follows the family closest to it (overrides `base`).
   std::optional<Vec3> baseDirection;
+  // Sweeps of repairStars over the laid triangulation (0: leave it as laid); what it did goes in the notes.
+  int repairSweeps = 12;
   int maxLayers = 100000;    // layers over all fronts; laying stops there (with a note)
   int maxVertices = 4000000; // more would be needed: Error(InvalidParameter) naming the cell size
 };

@@ -49,8 +49,11 @@ struct MeshMetrics {
   std::map<int, int> vertexValence;      // number of faces at a vertex -> count (3 inside a P-Hex mesh)
   // Filled by measure(mesh, surface), from the Gaussian curvature at each face's centre:
   // §3: a valid face is convex where K > 0 and non-convex where K < 0 (parabolic faces may be either).
+  // A face whose corners lie where K has another sign than at its centre spans a parabolic curve (§6 step 1)
+  // and is counted in parabolicFaceCount instead.
   std::vector<std::uint8_t> convexityMismatch;  // #faces, 1 where the face contradicts the sign of K
   int convexityMismatchCount = 0;
+  int parabolicFaceCount = 0;                   // faces across a parabolic curve, not judged
   // affineRegularityDefect of each hexagon against the template the sign of K calls for; -1 where it does not
   // apply (not a hexagon, or a parabolic face).
   std::vector<double> regularity;

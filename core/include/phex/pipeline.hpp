@@ -44,7 +44,7 @@ struct PipelineParams {
   SurfaceParams surfaceParams;     // its parameters; missing ones take their defaults
   std::optional<MeshInput> mesh;   // an uploaded mesh instead of `surface` (for subdivision: the control mesh)
   TriangulationMethod method = TriangulationMethod::Auto;
-  std::string field = "principal"; // direction field of the conjugate methods (see parseFieldSpec)
+  std::string field = "principal"; // direction field of the conjugate methods (see parseFieldSpec, resolveField)
   double lowerBound = 0.3;         // §5.3 step-ratio lower bound b, in [0, 2]; 0 disables it
   int faces = 2000;                // wanted number of hexagons, 12 .. kMaxFaces (ignored when cell > 0)
   double cell = 0.0;               // wanted edge length of the triangulation, in model units (0: use faces)
@@ -67,6 +67,7 @@ struct StageTiming {
 
 struct PipelineResult {
   TriangulationMethod method;  // the triangulation method used (Auto resolved)
+  std::string field;           // the direction field of a conjugate method (Auto resolved), else empty
   SurfacePtr surface;          // the surface tiled (analytic, uploaded mesh, or subdivision limit surface)
   Triangulation triangulation;
   TriangulationCheck check;    // Propositions 4/5 on every star, valences, edge lengths
@@ -90,6 +91,9 @@ SurfacePreview surfacePreview(const PipelineParams& params);
 
 // The method `params` asks for, with Auto resolved.
 TriangulationMethod resolveMethod(const PipelineParams& params);
+// The direction field of the conjugate methods: under Auto, an analytic surface's recommended field
+// (SurfaceSpec::field) when `params.field` is the default "principal"; otherwise `params.field`.
+std::string resolveField(const PipelineParams& params);
 
 // Throws Error(InvalidParameter) naming the first parameter that is wrong.
 void validate(const PipelineParams& params);
@@ -97,6 +101,7 @@ void validate(const PipelineParams& params);
 // The first stage alone: the surface of `params` and its triangulation, checked.
 struct TriangulationStage {
   TriangulationMethod method;  // the method used (Auto resolved)
+  std::string field;           // the field a conjugate method laid along (Auto resolved), else empty
   SurfacePtr surface;
   Triangulation triangulation;
   TriangulationCheck check;

@@ -22,6 +22,8 @@ struct SurfaceSpec {
   // The triangulation method that tiles it best with its defaults (what method "auto" picks), as measured
   // over the method x surface matrix in tests/core/pipeline.cpp.
   std::string method = "progressive";
+  // The direction field "auto" lays a conjugate method along, unless the caller named another than principal.
+  std::string field = "principal";
 };
 
 using SurfaceParams = std::map<std::string, double>;

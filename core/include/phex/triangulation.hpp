@@ -40,16 +40,29 @@ Triangulation latticeTriangulation(const ParametricSurface& surface, double cell
 // What a triangulation promises for its dual P-Hex mesh (§4.2): every interior vertex's star checked in its
 // tangent plane with the vertex's Dupin indicatrix — each incident triangle, taken as the fundamental
 // triangle of a symmetric star, must satisfy Proposition 4 (K > 0) or 5 (K < 0); valences; edge lengths.
-// Stars at parabolic or planar points (classify with tolerance 1e-6 at the mean edge length) cannot be
-// judged this way (§5.3) and are listed apart.
+// Stars at parabolic or planar points (classify with tolerance 1e-6 at the mean edge length), and stars across
+// a parabolic curve (a vertex of the star where K has the other sign or vanishes, the paper's §6 test for the
+// parabolic region), cannot be judged this way (§5.3) and are listed apart.
 struct TriangulationCheck {
   int vertices = 0, interiorVertices = 0, boundaryVertices = 0;
   std::map<int, int> interiorValence;  // valence -> count, interior vertices only
   double regularFraction = 0.0;        // interior vertices of valence 6 / interior vertices
   std::vector<int> invalidStars;       // interior vertices whose star fails Proposition 4 / 5
-  std::vector<int> parabolicStars;     // interior vertices where the indicatrix degenerates (not checkable)
+  std::vector<int> parabolicStars;     // interior vertices at or across a parabolic curve (not checkable)
   double edgeMin = 0, edgeMax = 0, edgeMean = 0;
 };
 TriangulationCheck checkTriangulation(const Triangulation& triangulation, const Surface& surface);
+
+// Local repair of the stars checkTriangulation finds invalid: each centre of an invalid star, and each of its
+// neighbours, is moved within the surface (at most 0.4 of its ring's mean edge from where it was laid, no
+// triangle turned over) to the candidate position — towards its ring's centroid, or a small step in its
+// tangent plane — that leaves fewer invalid stars around it, or the same number further from the edge of
+// validity. Sweeps until no star is invalid, nothing improves, or `maxSweeps`. Connectivity is unchanged.
+struct RepairResult {
+  int invalidBefore = 0, invalidAfter = 0;  // invalid stars (as checkTriangulation counts them)
+  int moved = 0;                            // vertices moved
+  int sweeps = 0;
+};
+RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps = 12);
 
 }  // namespace phex
