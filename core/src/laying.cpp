@@ -7,6 +7,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "phex/duality.hpp"
 #include "phex/dupin.hpp"
 #include "phex/error.hpp"
 #include "phex/ideal_triangle.hpp"
@@ -75,6 +76,7 @@ struct Segment {
   double ratio = 0;      // step / base, kept on the apex for §5.3 re-use
   bool bounded = false, reused = false;
   bool asymptotic = false;  // AB runs (nearly) along an asymptotic direction: no valid triangle on it
+  bool degenerate = false;  // A and B (nearly) coincide, e.g. where a row folds back: no triangle on it
 };
 
 struct Apex {
@@ -352,7 +354,8 @@ Segment Laying::segment(const Row& row, int i) const {
       return s;
     case IdealApex::Status::Degenerate:
     default:
-      throw Error(ErrorCode::Internal, "laying: a degenerate base segment at " + describe(walker_, s.M));
+      s.degenerate = true;  // the row is left without an apex there, like at a singularity of the field
+      return s;
   }
   s.ratio = r;
   s.step = r * s.base;
@@ -375,10 +378,10 @@ bool Laying::collides(const Vec3& p, double radius) const {
 std::vector<std::optional<Apex>> Laying::progressiveApexes(const Row& row, const std::vector<Segment>& segments) const {
   const int n = static_cast<int>(segments.size());
   std::vector<std::optional<Apex>> apexes(n);
-  auto usable = [&](int i) { return i >= 0 && i < n && !segments[i].asymptotic; };
+  auto usable = [&](int i) { return i >= 0 && i < n && !segments[i].asymptotic && !segments[i].degenerate; };
   for (int i = 0; i < n; ++i) {
     const Segment& s = segments[i];
-    if (s.asymptotic) continue;
+    if (s.asymptotic || s.degenerate) continue;
     const int before = row.closed ? (i + n - 1) % n : i - 1, after = row.closed ? (i + 1) % n : i + 1;
     Vec3 offset = s.apexInPlane - s.M.point();
     if (usable(before) && usable(after))
@@ -443,6 +446,7 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
   int middle = -1;
   for (int i = 0; i < n; ++i) {
     const Segment& s = segments[i];
+    if (s.degenerate) continue;
     std::optional<Vec3> d = s.asymptotic ? std::nullopt : field_.direction(s.M, G_, &s.left);
     const Vec3 ab = vertices_[row.ids[(i + 1) % row.ids.size()]].point() - vertices_[row.ids[i]].point();
     if (d && d->cross(ab.normalized()).norm() < kMinConjugateSine) {
@@ -930,6 +934,15 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
 
   Laying laying(walker, field, options, family, progress, cancel);
   Triangulation t = laying.run(start, initial);
+  try {
+    vertexRings(t.mesh);
+  } catch (const Error& e) {
+    // Layers laid over each other: the cell is too coarse for how fast the directions turn here.
+    throw Error(ErrorCode::CannotTile, "the layers laid with cell " + std::to_string(options.cell) +
+                                           " fold onto each other (" + e.what() +
+                                           "); the cell is too coarse for this surface: ask for more faces or a "
+                                           "smaller cell");
+  }
   if (options.repairSweeps > 0) {
     checkCancel(cancel);
     const RepairResult r = repairStars(t, surface, options.repairSweeps);

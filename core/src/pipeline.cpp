@@ -1,5 +1,6 @@
 #include "phex/pipeline.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -181,13 +182,30 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       lo.cell = cell;
       lo.lowerBound = params.lowerBound;
       t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
-      // Layers of ideal triangles are not exactly equilateral, so the area per vertex differs from the
-      // estimate: when a face count was asked for and missed by more than 10 %, lay again with the cell
-      // scaled by the square root of the ratio.
-      const double ratio = double(t.triangulation.mesh.V.rows()) / params.faces;
-      if (params.cell == 0 && (ratio > 1.1 || ratio < 0.9)) {
-        lo.cell = cell * std::sqrt(ratio);
-        t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
+      // Layers of ideal triangles are not equilateral, and they may leave parts of the surface uncovered, so
+      // the vertex count (one hexagon each) differs from the area estimate. When a face count was asked for
+      // and missed by more than 10 %, lay again (at most twice): first with the cell scaled by the square root
+      // of the ratio, then by the exponent the two lays measured (a secant in log-log). The closest lay wins.
+      auto miss = [&](const Triangulation& tr) {
+        return std::abs(std::log(double(std::max<Eigen::Index>(tr.mesh.V.rows(), 1)) / params.faces));
+      };
+      double cells[3] = {cell, 0, 0}, counts[3] = {double(t.triangulation.mesh.V.rows()), 0, 0};
+      for (int attempt = 1; attempt < 3 && params.cell == 0 && miss(t.triangulation) > std::log(1.1); ++attempt) {
+        double exponent = 2;  // vertices ~ cell^-2 on a fully covered surface
+        if (attempt == 2 && counts[1] > 0 && counts[0] > 0 && std::abs(std::log(cells[1] / cells[0])) > 1e-3)
+          exponent = std::clamp(-std::log(counts[1] / counts[0]) / std::log(cells[1] / cells[0]), 0.5, 4.0);
+        lo.cell = cells[attempt - 1] * std::pow(std::max(counts[attempt - 1], 1.0) / params.faces, 1 / exponent);
+        cells[attempt] = lo.cell;
+        if (std::pow(cellForFaceCount(*t.surface, 1) / lo.cell, 2) > kMaxFaces) break;
+        Triangulation again;
+        try {
+          again = layTriangulation(*t.surface, lo, progress, cancel);
+        } catch (const Error& e) {
+          if (e.code() != ErrorCode::CannotTile) throw;
+          break;  // keep the lay that worked
+        }
+        counts[attempt] = double(again.mesh.V.rows());
+        if (miss(again) < miss(t.triangulation)) t.triangulation = std::move(again);
       }
     }
   }

@@ -1,0 +1,109 @@
+#include <catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "phex/error.hpp"
+#include "phex/laying.hpp"
+#include "phex/pipeline.hpp"
+#include "phex/surfaces.hpp"
+
+using namespace phex;
+
+TEST_CASE("repair: disturbed stars of a valid laying are made valid again, within the surface") {
+  const ParametricSurfacePtr s = makeSurface("hyperboloid");
+  LayingOptions o;
+  o.method = LayingMethod::Prespecified;
+  o.cell = 0.1;
+  o.repairSweeps = 0;  // as laid
+  Triangulation t = layTriangulation(*s, o);
+  REQUIRE(checkTriangulation(t, *s).invalidStars.empty());
+  // Push scattered vertices a third of an edge in random directions: some stars leave the valid sectors (Prop. 5).
+  const TriangulationCheck before = checkTriangulation(t, *s);
+  std::mt19937 rng(7);
+  int disturbed = 0;
+  for (int v = 0; v < t.mesh.V.rows() && disturbed < 40; v += 13) {
+    const LocalGeometry g = s->geometryAt(t.uv[v].x(), t.uv[v].y());
+    const double shift = std::uniform_real_distribution<double>(0.3, 0.4)(rng) * before.edgeMean;
+    const double angle = std::uniform_real_distribution<double>(0, 6.283185307179586)(rng);
+    const Vec3 moved = g.point + shift * (std::cos(angle) * g.d1 + std::sin(angle) * g.d2);
+    t.uv[v] = s->project(moved, t.uv[v]);
+    t.mesh.V.row(v) = s->position(t.uv[v].x(), t.uv[v].y()).transpose();
+    ++disturbed;
+  }
+  const Triangulation disturbedCopy = t;
+  const int invalidBefore = static_cast<int>(checkTriangulation(t, *s).invalidStars.size());
+  REQUIRE(invalidBefore > 5);
+
+  const RepairResult r = repairStars(t, *s);
+  INFO("invalid " << r.invalidBefore << " -> " << r.invalidAfter << ", moved " << r.moved << " in " << r.sweeps);
+  CHECK(r.invalidBefore == invalidBefore);
+  CHECK(r.invalidAfter == static_cast<int>(checkTriangulation(t, *s).invalidStars.size()));
+  CHECK(r.invalidAfter == 0);
+  CHECK(r.moved > 0);
+  CHECK(t.mesh.F == disturbedCopy.mesh.F);  // connectivity unchanged
+  double offSurface = 0, furthest = 0;
+  for (int v = 0; v < t.mesh.V.rows(); ++v) {
+    offSurface = std::max(offSurface, (s->position(t.uv[v].x(), t.uv[v].y()) - t.mesh.V.row(v).transpose()).norm());
+    furthest = std::max(furthest, (t.mesh.V.row(v) - disturbedCopy.mesh.V.row(v)).norm());
+  }
+  CHECK(offSurface < 1e-9);              // still on the surface, uv in step
+  CHECK(furthest < 0.5 * before.edgeMax);  // local moves only
+}
+
+TEST_CASE("repair: a valid triangulation is left alone") {
+  const ParametricSurfacePtr s = makeSurface("sphere");
+  Triangulation t = latticeTriangulation(*s, cellForFaceCount(*s, 800));
+  const Triangulation copy = t;
+  const RepairResult r = repairStars(t, *s);
+  CHECK(r.invalidBefore == 0);
+  CHECK(r.moved == 0);
+  CHECK(t.mesh.V == copy.mesh.V);
+}
+
+TEST_CASE("repair: the laying repairs and says so (free-form surface, Fig. 22)") {
+  const ParametricSurfacePtr s = makeSurface("freeform");
+  LayingOptions o;
+  o.method = LayingMethod::Prespecified;
+  o.cell = 0.1;
+  o.start = Vec3(1, -1, 0);
+  o.repairSweeps = 0;
+  const Triangulation laid = layTriangulation(*s, o);
+  o.repairSweeps = 12;
+  const Triangulation repaired = layTriangulation(*s, o);
+  const auto before = checkTriangulation(laid, *s).invalidStars.size();
+  const auto after = checkTriangulation(repaired, *s).invalidStars.size();
+  INFO("invalid stars as laid " << before << ", repaired " << after);
+  CHECK(before > 10);
+  CHECK(after * 5 < before);
+  bool noted = false;
+  for (const std::string& n : repaired.notes) noted = noted || n.find("repaired") != std::string::npos;
+  CHECK(noted);
+}
+
+TEST_CASE("pipeline: auto picks the field as well; a too coarse cell is named, not a broken mesh") {
+  PipelineParams p;
+  p.surface = "elliptic-paraboloid";  // two umbilics inside: principal lines are singular there
+  CHECK(resolveField(p) == "param");
+  const TriangulationStage t = triangulate(p);
+  CHECK(t.field == "param");
+  CHECK(t.check.invalidStars.empty());
+  CHECK(t.check.regularFraction >= 0.95);
+  p.field = "angle:20";  // a field the caller names is kept
+  CHECK(resolveField(p) == "angle:20");
+  p.field = "principal";
+  p.method = TriangulationMethod::Prespecified;  // so is the default field under an explicit method
+  CHECK(resolveField(p) == "principal");
+
+  PipelineParams coarse;
+  coarse.surface = "freeform";
+  coarse.method = TriangulationMethod::Progressive;
+  coarse.faces = 60;
+  try {
+    triangulate(coarse);
+    SUCCEED("laid");  // a lay that works at this size is fine too
+  } catch (const Error& e) {
+    CHECK(e.code() == ErrorCode::CannotTile);
+    CHECK(std::string(e.what()).find("coarse") != std::string::npos);
+  }
+}
