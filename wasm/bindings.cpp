@@ -146,6 +146,7 @@ val resultToJs(const phex::PipelineResult& r) {
   metrics.set("faceArea", copyArray("Float64Array", m.faceArea.data(), m.faceArea.size()));
   metrics.set("convexityMismatch", copyArray("Uint8Array", m.convexityMismatch.data(), m.convexityMismatch.size()));
   metrics.set("convexityMismatchCount", m.convexityMismatchCount);
+  metrics.set("parabolicFaceCount", m.parabolicFaceCount);
   metrics.set("regularity", copyArray("Float64Array", m.regularity.data(), m.regularity.size()));
   metrics.set("regularityMean", m.regularityMean);
   metrics.set("boundaryFace", copyArray("Uint8Array", r.dual.boundaryFace.data(), r.dual.boundaryFace.size()));
@@ -190,6 +191,7 @@ val resultToJs(const phex::PipelineResult& r) {
   out.set("timings", timings);
   out.set("dualFallbacks", r.dual.fallbackCount);
   out.set("method", std::string(phex::triangulationMethodName(r.method)));
+  out.set("field", r.field);
   return out;
 }
 
@@ -232,6 +234,7 @@ val surfaces() {
     e.set("name", s.name);
     e.set("description", s.description);
     e.set("method", s.method);
+    e.set("field", s.field);
     val ps = val::array();
     for (const phex::ParameterSpec& p : s.parameters) {
       val q = val::object();

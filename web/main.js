@@ -247,7 +247,11 @@ async function curvaturePreview() {
   return preview.data;
 }
 
-function showStats({ metrics, solve, timings }) {
+function showStats({ metrics, solve, timings, method, field, triangulation }) {
+  const invalidStars = triangulation?.check?.invalidStars?.length;
+  $('triangulation-info').textContent = [method, field, invalidStars === undefined ? null : `${invalidStars} invalid stars`]
+    .filter(Boolean)
+    .join(' · ') || '–';
   $('face-count').textContent = String(metrics.faceCount);
   $('faces-by-size').textContent = Object.entries(metrics.facesBySize)
     .map(([size, count]) => `${size}-gons ${count}`)
@@ -255,7 +259,10 @@ function showStats({ metrics, solve, timings }) {
   $('planarity-max').textContent = fmt(metrics.planarityMax);
   $('planarity-mean').textContent = fmt(metrics.planarityMean);
   $('invalid-faces').textContent = String(metrics.selfIntersectingCount);
-  $('convexity-mismatch').textContent = metrics.convexityMismatchCount === undefined ? '–' : String(metrics.convexityMismatchCount);
+  $('convexity-mismatch').textContent =
+    metrics.convexityMismatchCount === undefined
+      ? '–'
+      : `${metrics.convexityMismatchCount} off${metrics.parabolicFaceCount ? `, ${metrics.parabolicFaceCount} across K = 0` : ''}`;
   $('regularity-mean').textContent = metrics.regularityMean === undefined ? '–' : metrics.regularityMean.toFixed(3);
   $('surface-distance').textContent = Number.isFinite(metrics.surfaceDistanceMax) ? `${fmt(metrics.surfaceDistanceMax)} max` : '–';
   $('iterations').textContent = `${solve.iterations}${solve.converged ? '' : ' (not converged)'}`;

@@ -231,3 +231,16 @@ test('after dispose() every call rejects with code cancelled', async () => {
   const error = await other.run({ surface: 'torus', faces: 100 }).catch((e) => e);
   assert.equal(error.code, 'cancelled');
 });
+
+test("method 'auto' picks the field too and says which it used", async () => {
+  const spec = (await phex.surfaces()).find((s) => s.name === 'elliptic-paraboloid');
+  assert.equal(spec.field, 'param');
+  const r = await phex.run({ surface: 'elliptic-paraboloid', faces: 600 });
+  assert.equal(r.method, 'prespecified');
+  assert.equal(r.field, 'param');
+  assert.equal(r.triangulation.check.invalidStars.length, 0);
+  assert.equal(typeof r.metrics.parabolicFaceCount, 'number');
+  const named = await phex.run({ surface: 'elliptic-paraboloid', faces: 600, method: 'prespecified', field: 'angle:10' });
+  assert.equal(named.field, 'angle:10');
+  assert.equal(torus.field, ''); // the torus is laid as a lattice
+});

@@ -84,6 +84,8 @@ export interface Metrics {
   /** Per face: 1 where convexity disagrees with the sign of the Gaussian curvature (§4.2: convex where K > 0, non-convex where K < 0). */
   convexityMismatch?: Uint8Array;
   convexityMismatchCount?: number;
+  /** Faces across a parabolic curve (their corners lie where K has another sign): not judged for convexity. */
+  parabolicFaceCount?: number;
   /** Per face: affine regularity in [0, 1] (1 for an affine regular hexagon). */
   regularity?: Float64Array;
   regularityMean?: number;
@@ -158,6 +160,10 @@ export interface Result {
   timings: Timings;
   /** Number of dual vertices placed at their triangle's centroid because the duality was ill-posed there (near parabolic points). */
   dualFallbacks: number;
+  /** The triangulation method used ('auto' resolved). */
+  method: Exclude<Method, 'auto'>;
+  /** The direction field the conjugate methods laid along ('auto' resolved); '' for lattice and subdivision. */
+  field: string;
 }
 
 /** A triangulation method (§5): see {@link RunParams.method}. */
@@ -321,6 +327,8 @@ export interface SurfaceSpec {
   parameters: SurfaceParameter[];
   /** The triangulation method `method: 'auto'` uses for this surface. */
   method: Exclude<Method, 'auto'>;
+  /** The direction field `method: 'auto'` lays a conjugate method along (when `field` is left at 'principal'). */
+  field: string;
 }
 
 /** A loaded phex instance. */
