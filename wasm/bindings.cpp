@@ -126,6 +126,7 @@ val resultToJs(const phex::PipelineResult& r) {
   check.set("edgeMin", c.edgeMin);
   check.set("edgeMax", c.edgeMax);
   check.set("edgeMean", c.edgeMean);
+  check.set("coverage", c.coverage);
   tri.set("check", check);
   out.set("triangulation", tri);
 

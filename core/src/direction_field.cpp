@@ -23,10 +23,14 @@ std::optional<Vec3> tangentUnit(const LocalGeometry& g, const Vec3& v) {
 }
 
 // Every direction is principal at an umbilic or planar point: the principal fields are undefined there.
-bool isUmbilic(const LocalGeometry& g, double cell) {
+bool isUmbilic(const LocalGeometry& g, double cell, double tolerance) {
   const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
-  return g.k1 - g.k2 <= 1e-6 * kmax || kmax * cell <= 1e-9;
+  return g.k1 - g.k2 <= tolerance * kmax || kmax * cell <= 1e-9;
 }
+
+// Relative k1 - k2 below which a point counts as umbilic: round-off on analytic surfaces, the estimation
+// noise of jet-fitted curvature on uploaded meshes.
+constexpr double kUmbilicAnalytic = 1e-6, kUmbilicMesh = 0.02;
 
 double parseNumber(const std::string& text, const std::string& whole) {
   char* end = nullptr;
@@ -152,6 +156,10 @@ std::optional<Vec3> DirectionField::meridian(const SurfacePoint& p) const {
   return tangentUnit(p.g, p.g.normal.cross(planeNormal));
 }
 
+bool DirectionField::isUmbilic(const LocalGeometry& g) const {
+  return phex::isUmbilic(g, walker_.cell(), walker_.parametric() ? kUmbilicAnalytic : kUmbilicMesh);
+}
+
 std::optional<Vec3> DirectionField::first(const SurfacePoint& p) const {
   const LocalGeometry& g = p.g;
   const double rad = spec_.degrees * kPi / 180;
@@ -164,7 +172,7 @@ std::optional<Vec3> DirectionField::first(const SurfacePoint& p) const {
     case FieldKind::Angle:
       // At an umbilic every direction is principal; a sphere's curvature lines are then taken as its meridians
       // and parallels about z, so that a sphere laid with "principal" gets the radial network (Fig. 20).
-      return isUmbilic(g, walker_.cell()) ? rotated(meridian(p)) : rotated(g.d1);
+      return isUmbilic(g) ? rotated(meridian(p)) : rotated(g.d1);
     case FieldKind::Param: {
       const ParametricSurface::Jet j = walker_.parametric()->jet(p.uv.x(), p.uv.y());
       return tangentUnit(g, spec_.paramV ? j.Pv : j.Pu);
@@ -181,11 +189,12 @@ std::optional<Vec3> DirectionField::first(const SurfacePoint& p) const {
 std::optional<Vec3> DirectionField::direction(const SurfacePoint& p, Family family, const Vec3* previous) const {
   const LocalGeometry& g = p.g;
   std::optional<Vec3> d = first(p);
-  const bool umbilic = isUmbilic(g, walker_.cell());
+  const bool umbilic = isUmbilic(g);
   bool anyIsFine = !d && (spec_.kind == FieldKind::Principal || spec_.kind == FieldKind::Angle);
-  if (d && spec_.kind == FieldKind::Principal && previous && !umbilic) {
+  if (d && spec_.kind == FieldKind::Principal && previous) {
     // Curvature lines by continuity, not by label: where k1 and k2 cross (an umbilic curve, e.g. on a surface
-    // of revolution) d1 and d2 swap, and a line following d1 would turn by 90 degrees.
+    // of revolution) d1 and d2 swap, and a line following d1 would turn by 90 degrees. The same across an
+    // umbilic region, where the meridian or its perpendicular stands in for them.
     const Vec3 other = g.normal.cross(*d);
     if (std::abs(other.dot(*previous)) > std::abs(d->dot(*previous))) d = other;
   } else if (d && family == Family::Conjugate) {

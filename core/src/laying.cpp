@@ -451,8 +451,11 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
     const Vec3 ab = vertices_[row.ids[(i + 1) % row.ids.size()]].point() - vertices_[row.ids[i]].point();
     if (d && d->cross(ab.normalized()).norm() < kMinConjugateSine) {
       const double k1 = std::abs(s.M.g.k1), k2 = std::abs(s.M.g.k2);
-      if (std::min(k1, k2) > kNearParabolic * std::max(k1, k2)) cannotTile(s.M, kAsymptoticBase);
-      d = s.left;  // §5.3: near a parabolic curve the conjugate degenerates; lay across as Method 1 would
+      // Near a parabolic curve the conjugate degenerates (§5.3), near an umbilic D_G is undefined: lay across
+      // as Method 1 would. Elsewhere AB runs along an asymptotic direction.
+      if (std::min(k1, k2) > kNearParabolic * std::max(k1, k2) && !field_.isUmbilic(s.M.g))
+        cannotTile(s.M, kAsymptoticBase);
+      d = s.left;
     }
     if (s.asymptotic) cannotTile(s.M, kAsymptoticBase);
     if (!d) continue;  // a singularity of D_G: no apex here

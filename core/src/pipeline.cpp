@@ -175,6 +175,11 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
     const double cell = checkCell(*t.surface);
     if (params.method == TriangulationMethod::Lattice) {
       t.triangulation = latticeTriangulation(dynamic_cast<const ParametricSurface&>(*t.surface), cell);
+      const RepairResult repaired = repairStars(t.triangulation, *t.surface);
+      if (repaired.invalidBefore > 0)
+        t.triangulation.notes.push_back("repaired " + std::to_string(repaired.invalidBefore - repaired.invalidAfter) +
+                                        " of " + std::to_string(repaired.invalidBefore) + " invalid stars by moving " +
+                                        std::to_string(repaired.moved) + " vertices within the surface");
     } else {
       LayingOptions lo;
       lo.method = params.method == TriangulationMethod::Progressive ? LayingMethod::Progressive : LayingMethod::Prespecified;
@@ -210,6 +215,10 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
     }
   }
   t.check = checkTriangulation(t.triangulation, *t.surface);
+  if (t.check.coverage >= 0 && t.check.coverage < 0.8)
+    t.triangulation.notes.push_back("the triangulation covers only " + std::to_string(int(std::round(100 * t.check.coverage))) +
+                                    " % of the surface: its layers stopped short (see the notes above); another "
+                                    "field, method or start point may cover more");
   return t;
 }
 

@@ -157,10 +157,8 @@ Triangulation rowLattice(const ParametricSurface& surface, double cell) {
       for (int i = 0; i < nu; ++i) u.push_back(d.u0 + (i + (shifted ? 0.5 : 0.0)) * du);
     } else if (!shifted) {
       for (int i = 0; i <= nu; ++i) u.push_back(d.u0 + i * du);
-    } else {  // half-shifted row, closed by the two boundary points
-      u.push_back(d.u0);
+    } else {  // half-shifted row: the boundary zigzags, so that every interior vertex keeps valence 6
       for (int i = 0; i < nu; ++i) u.push_back(d.u0 + (i + 0.5) * du);
-      u.push_back(d.u1);
     }
     for (double x : u) {
       ids[r].push_back(static_cast<int>(t.uv.size()));
@@ -209,6 +207,13 @@ TriangulationCheck checkTriangulation(const Triangulation& t, const Surface& sur
     }
   c.edgeMean = edges ? c.edgeMean / edges : 0.0;
   if (!edges) c.edgeMin = 0;
+  if (dynamic_cast<const MeshSurface*>(&surface) || dynamic_cast<const ParametricSurface*>(&surface)) {
+    double area = 0;
+    for (int f = 0; f < T.F.rows(); ++f)
+      area += 0.5 * (T.V.row(T.F(f, 1)) - T.V.row(T.F(f, 0))).cross(T.V.row(T.F(f, 2)) - T.V.row(T.F(f, 0))).norm();
+    const double total = surfaceArea(surface);
+    if (total > 0) c.coverage = area / total;
+  }
   int regular = 0;
   for (int v = 0; v < c.vertices; ++v) {
     if (rings.triangles[v].empty()) continue;

@@ -111,6 +111,7 @@ json triangulationJson(const phex::Triangulation& t, const phex::TriangulationCh
           {"interiorValence", valence},
           {"invalidStars", c.invalidStars},
           {"parabolicStars", c.parabolicStars.size()},
+          {"coverage", c.coverage},
           {"edgeLength", {{"min", c.edgeMin}, {"max", c.edgeMax}, {"mean", c.edgeMean}}},
           {"notes", t.notes}};
 }

@@ -361,3 +361,18 @@ TEST_CASE("laying: progress is reported and cancelling stops it") {
     CHECK(e.code() == ErrorCode::Cancelled);
   }
 }
+
+TEST_CASE("laying: an uploaded sphere (umbilic everywhere, noisy estimated directions) is laid along its meridians") {
+  const ParametricSurfacePtr sphere = makeSurface("sphere");
+  const Triangulation sample = latticeTriangulation(*sphere, cellForFaceCount(*sphere, 15000));
+  const MeshSurface mesh(sample.mesh, "sampled sphere");
+  const double cell = cellForFaceCount(mesh, 1500);
+  const Triangulation t = layTriangulation(mesh, options(cell, LayingMethod::Prespecified));
+  const Quality q = quality(t, mesh, cell);
+  REPORT(q);
+  // The whole band is covered (about 1500 vertices), not a patch around the start.
+  CHECK(t.mesh.V.rows() > 1000);
+  CHECK(q.check.regularFraction >= 0.95);
+  CHECK(q.invalid <= 0.002 * q.check.interiorVertices);
+  CHECK(q.selfIntersecting == 0);
+}

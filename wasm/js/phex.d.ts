@@ -51,6 +51,26 @@ export interface Triangulation {
   triangles: Uint32Array;
   /** Integral lines of the direction field the triangulation follows, when the method has one. */
   fieldLines?: Polylines;
+  /** What the method had to do: lower bound active, steps re-used across parabolic curves, stars repaired, ... */
+  notes: string[];
+  /** Propositions 4/5 on every star (§4.2), valences, edge lengths, coverage. */
+  check: TriangulationCheck;
+}
+
+/** The check of a triangulation's stars (§4.2). */
+export interface TriangulationCheck {
+  interiorVertices: number;
+  /** Interior vertices of valence 6 over interior vertices. */
+  regularFraction: number;
+  /** Interior vertices whose star fails Proposition 4 (K > 0) or 5 (K < 0). */
+  invalidStars: Uint32Array;
+  /** Interior vertices at or across a parabolic curve, where the propositions cannot judge. */
+  parabolicStars: number;
+  edgeMin: number;
+  edgeMax: number;
+  edgeMean: number;
+  /** Triangulation area over surface area (about 1: the whole surface is covered); -1 when unknown. */
+  coverage: number;
 }
 
 /** Quality measures of the P-Hex mesh. */

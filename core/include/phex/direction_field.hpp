@@ -87,6 +87,11 @@ class DirectionField {
   // curvature line nearest to `previous` (continuity across curves where k1 and k2 swap labels).
   std::optional<Vec3> direction(const SurfacePoint& p, Family family, const Vec3* previous = nullptr) const;
 
+  // Whether g is an umbilic (or planar point) for this field: k1 - k2 within round-off of kmax on an analytic
+  // surface, within 2 % on an uploaded mesh, whose estimated curvatures are that noisy (a sampled sphere's
+  // principal directions are noise).
+  bool isUmbilic(const LocalGeometry& g) const;
+
   const FieldSpec& spec() const { return spec_; }
   const SurfaceWalker& walker() const { return walker_; }
 

@@ -50,6 +50,10 @@ struct TriangulationCheck {
   std::vector<int> invalidStars;       // interior vertices whose star fails Proposition 4 / 5
   std::vector<int> parabolicStars;     // interior vertices at or across a parabolic curve (not checkable)
   double edgeMin = 0, edgeMax = 0, edgeMean = 0;
+  // Area of the triangulation over the area of the surface (surfaceArea): about 1 when the laying covered
+  // the whole surface, less where layers stopped short (at singularities of the field, or where fronts
+  // could not go on); -1 for a surface whose area phex cannot take.
+  double coverage = -1;
 };
 TriangulationCheck checkTriangulation(const Triangulation& triangulation, const Surface& surface);
 
