@@ -204,6 +204,7 @@ class Laying {
 
   // What happened, for the notes.
   int boundedLayers_ = 0, boundedSegments_ = 0, reusedLayers_ = 0, reusedSegments_ = 0;
+  int filledApexes_ = 0;
   int resampled_ = 0, boundaryStops_ = 0, collisions_ = 0, invalidDrops_ = 0, splits_ = 0, layers_ = 0;
   int asymptoticStops_ = 0;
   std::string firstResample_, firstInvalidDrop_, firstReuse_, firstAsymptoticStop_;
@@ -473,7 +474,9 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
   const Vec3 rowDirection =
       vertices_[row.ids[(middle + 1) % row.ids.size()]].point() - vertices_[row.ids[middle]].point();
   const double rowAhead = row.closed ? row.curveLength : row.sampleArc.back() - row.sampleArc[middle];
-  const double rowBehind = row.closed ? 0.0 : row.sampleArc[middle] - row.sampleArc.front();
+  // A closed row whose next flow line does not close (it leaves the surface, e.g. a loop around a bump that
+  // reaches the boundary) is traced backwards as far as forwards, so that the whole loop is followed.
+  const double rowBehind = row.closed ? row.curveLength : row.sampleArc[middle] - row.sampleArc.front();
   std::vector<std::optional<Crossing>> crossings(n);
   double s0 = segments[middle].step;
   for (int iteration = 0; iteration < 6; ++iteration) {
@@ -675,6 +678,36 @@ void Laying::layLayer(std::size_t f) {
       apexes[i].reset();
       ++collisions_;
     }
+  // A single missing apex between two laid ones (a collision, a crossing that failed, a drop below DE) would
+  // split the row — a closed one into an open row whose ends then shrink layer by layer, leaving wedges of
+  // the surface uncovered. It is filled in between its neighbours instead; the star check and the repair
+  // judge it like any other vertex.
+  for (int i = 0; i < n; ++i) {
+    const int before = A.closed ? (i + n - 1) % n : i - 1, after = A.closed ? (i + 1) % n : i + 1;
+    if (apexes[i] || before < 0 || after >= n || !apexes[before] || !apexes[after] || segments[i].asymptotic) continue;
+    const Apex& a = *apexes[before];
+    const Apex& b = *apexes[after];
+    Apex filled;
+    if (o_.method == LayingMethod::Prespecified) {
+      if (next.curve.size() < 2) continue;
+      double t = b.arc;
+      if (next.closed && t < a.arc) t += next.curveLength;
+      t = 0.5 * (a.arc + t);
+      if (next.closed) t = std::fmod(t, next.curveLength);
+      if (!next.closed && (t < 0 || t > next.curveLength)) continue;
+      filled.p = pointAtArc(walker_, next.curve, next.curveArc, next.closed, next.curveLength, t);
+      filled.arc = t;
+    } else {
+      const Vec3 x = 0.5 * (a.p.point() + b.p.point());
+      filled.p = walker_.project(x, a.p);
+      if (walker_.isOutside(x, filled.p)) continue;
+    }
+    filled.ratio = 0.5 * (a.ratio + b.ratio);
+    const double spacing = 0.5 * (a.p.point() - b.p.point()).norm();
+    if (!(spacing > 0) || collides(filled.p.point(), 0.5 * std::min(spacing, segments[i].base))) continue;
+    apexes[i] = filled;
+    ++filledApexes_;
+  }
   for (int id : A.ids) inBase_[id] = 0;
 
   bool bounded = false, reused = false;
@@ -855,6 +888,7 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
                                 " triangles), first near " + firstReuse_);
   note(resampled_ > 0, "rows resampled " + std::to_string(resampled_) +
                            " times where their spacing drifted from the cell, first near " + firstResample_);
+  note(filledApexes_ > 0, std::to_string(filledApexes_) + " missing apexes filled in between their neighbours");
   note(boundaryStops_ > 0, std::to_string(boundaryStops_) + " fronts stopped at the boundary");
   note(splits_ > 0, std::to_string(splits_) + " rows split where apexes fell outside or collided");
   note(collisions_ > 0, std::to_string(collisions_) + " apexes dropped where they would overlap laid triangles");
