@@ -7,6 +7,7 @@
 
 #include "phex/dupin.hpp"
 #include "phex/error.hpp"
+#include "phex/metrics.hpp"
 
 namespace phex {
 
@@ -173,9 +174,16 @@ DualMesh assembleDual(const TriMesh& T, const Points& U, const std::vector<Local
         fanAngle += std::atan2(e1.cross(e2).norm(), e1.dot(e2));
       }
       if (fanAngle < 150.0 * M_PI / 180.0) {
-        ids.push_back(static_cast<int>(points.size()));
-        points.push_back(geo[v].point);
-        dual.vertexTriangle.push_back(-1);
+        // The vertex as the panel's corner, unless the polygon would cross itself with it (a lone skinny
+        // triangle at a sharp corner whose dual point lies outside it): then the panel is cut off before it.
+        std::vector<Vec2> polygon;
+        for (int id : ids) polygon.push_back(toTangentPlane(geo[v], points[id]));
+        polygon.push_back(Vec2::Zero());
+        if (!polygonSelfIntersects(polygon)) {
+          ids.push_back(static_cast<int>(points.size()));
+          points.push_back(geo[v].point);
+          dual.vertexTriangle.push_back(-1);
+        }
       }
     }
     dual.mesh.addFace(ids);
