@@ -127,7 +127,7 @@ TEST_CASE("pipeline: method auto tiles every analytic surface validly (the free-
     INFO(spec.name << " by " << spec.method << " along " << spec.field);
     PipelineParams p;
     p.surface = spec.name;
-    p.faces = 800;
+    p.faces = 2000;
     const PipelineResult r = runPipeline(p);
     INFO("invalid stars " << r.check.invalidStars.size() << ", valence 6 " << r.check.regularFraction << ", coverage "
                           << r.check.coverage << ", self-intersecting " << r.metrics.selfIntersectingCount);
@@ -138,8 +138,10 @@ TEST_CASE("pipeline: method auto tiles every analytic surface validly (the free-
       continue;
     }
     CHECK(r.check.invalidStars.empty());
+    CHECK(r.metrics.selfIntersectingCount == 0);
+    CHECK(r.metrics.surfaceDistanceMax <= 0.002);
     CHECK(r.check.regularFraction >= 0.95);
-    CHECK(r.check.coverage >= 0.6);
+    CHECK(r.check.coverage >= 0.8);
     CHECK(r.metrics.faceCount >= 0.75 * p.faces);
     CHECK(r.metrics.faceCount <= 1.25 * p.faces);
   }
