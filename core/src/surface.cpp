@@ -122,27 +122,35 @@ Eigen::Vector3i ParametricSurface::SeedGrid::cellOf(const Vec3& p) const {
 int ParametricSurface::SeedGrid::index(const Eigen::Vector3i& c) const { return (c.z() * dims[1] + c.y()) * dims[0] + c.x(); }
 
 std::size_t ParametricSurface::nearestSeed(const Vec3& p) const {
-  // Rings of cells around p's (clamped) cell, until no unvisited cell can hold a nearer seed.
+  // Rings of cells around p's (clamped) cell, until no unvisited cell can hold a nearer seed: every seed
+  // outside the block of cells searched so far is at least as far from p as the nearest face of that
+  // block that is not on the grid's border (no seed lies beyond the border).
   const Eigen::Vector3i c0 = grid_.cellOf(p);
-  const Vec3 clamped = p.cwiseMax(grid_.origin).cwiseMin(grid_.origin + grid_.cell * grid_.dims.cast<double>());
-  const double outside = (p - clamped).norm();  // p's distance from the grid's box
   std::size_t best = 0;
   double bestD = std::numeric_limits<double>::infinity();
   const int maxRing = grid_.dims.maxCoeff();
   for (int r = 0; r <= maxRing; ++r) {
-    for (int z = c0.z() - r; z <= c0.z() + r; ++z)
-      for (int y = c0.y() - r; y <= c0.y() + r; ++y)
-        for (int x = c0.x() - r; x <= c0.x() + r; ++x) {
-          if (std::max({std::abs(x - c0.x()), std::abs(y - c0.y()), std::abs(z - c0.z())}) != r) continue;
-          if (x < 0 || y < 0 || z < 0 || x >= grid_.dims[0] || y >= grid_.dims[1] || z >= grid_.dims[2]) continue;
-          const int cell = grid_.index(Eigen::Vector3i(x, y, z));
+    const Eigen::Vector3i lo = c0 - Eigen::Vector3i::Constant(r), hi = c0 + Eigen::Vector3i::Constant(r);
+    for (int z = std::max(lo.z(), 0); z <= std::min(hi.z(), grid_.dims[2] - 1); ++z)
+      for (int y = std::max(lo.y(), 0); y <= std::min(hi.y(), grid_.dims[1] - 1); ++y) {
+        const bool inner = z != lo.z() && z != hi.z() && y != lo.y() && y != hi.y();
+        // Inside the ring's shell only the two cells at x = lo, hi; on its faces the whole row.
+        const int step = inner ? std::max(1, 2 * r) : 1;
+        for (int x = lo.x(); x <= hi.x(); x += step) {
+          if (x < 0 || x >= grid_.dims[0]) continue;
+          const int cell = (z * grid_.dims[1] + y) * grid_.dims[0] + x;
           for (int k = grid_.start[cell]; k < grid_.start[cell + 1]; ++k) {
             const double dd = (seedPoints_[grid_.ids[k]] - p).squaredNorm();
             if (dd < bestD) bestD = dd, best = static_cast<std::size_t>(grid_.ids[k]);
           }
         }
-    const double reach = outside + r * grid_.cell;  // every seed beyond ring r is at least this far
-    if (bestD <= reach * reach) break;
+      }
+    double reach = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+      if (lo[a] > 0) reach = std::min(reach, p[a] - (grid_.origin[a] + lo[a] * grid_.cell));
+      if (hi[a] < grid_.dims[a] - 1) reach = std::min(reach, grid_.origin[a] + (hi[a] + 1) * grid_.cell - p[a]);
+    }
+    if (reach == std::numeric_limits<double>::infinity() || (reach > 0 && bestD <= reach * reach)) break;
   }
   return best;
 }
