@@ -89,6 +89,12 @@ phex::PipelineParams paramsFromJs(const val& o) {
     p.mesh = std::move(mesh);
   }
   if (has(o, "solver")) p.solver = phex::parseMethod(text(o, "solver"));
+  if (has(o, "folds")) {
+    const std::string folds = text(o, "folds");
+    if (folds != "prevent" && folds != "allow")
+      throw phex::Error(phex::ErrorCode::InvalidParameter, "folds must be 'prevent' or 'allow' (got '" + folds + "')");
+    p.preventFolds = folds == "prevent";
+  }
   return p;
 }
 

@@ -254,6 +254,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   po.mu = params.mu;
   po.tolerance = params.tolerance;
   po.maxIterations = params.maxIterations;
+  po.preventFolds = params.preventFolds;
   po.surface = &surface;
   r.solve = planarize(r.hex, po, progress, cancel);
   clock.done("planarize");

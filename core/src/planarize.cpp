@@ -257,6 +257,20 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
     return sumUp();
   };
   std::vector<LocalGeometry> feet(options.mu > 0 ? nv : 0);
+  // Whether face f, projected onto its current plane, is a simple polygon.
+  std::vector<Vec2> polygon;
+  auto faceIsSimple = [&](int f) {
+    if (faceScale[f] == 0) return true;
+    const Vec3 n = normal[f];
+    const Vec3 a = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized(), b = n.cross(a);
+    polygon.clear();
+    for (int i = 0; i < mesh.faceSize(f); ++i) {
+      const Vec3 p = mesh.vertex(mesh.face(f)[i]);
+      polygon.emplace_back(p.dot(a), p.dot(b));
+    }
+    return !polygonSelfIntersects(polygon);
+  };
+  long foldsPrevented = 0;
   // The vertex step: every vertex moved to the minimizer of its own terms for the current planes.
   auto moveVertex = [&](int v, double lambda) {
     const double wl = lambda / (h * h), wm = options.mu / (h * h);
@@ -284,6 +298,27 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
     // A sweep never moves a vertex by more than an edge length: near-degenerate faces (an invalid
     // triangulation's) have ill-defined planes whose intersections can lie anywhere.
     if (dx.norm() > h) dx *= h / dx.norm();
+    // Nor does it turn a simple face into a self-intersecting one: where a vertex's planes are nearly
+    // dependent (next to a parabolic curve) their intersection runs off along the free direction and
+    // drags the vertex across its face. The step is then shortened (halved up to four times, else not
+    // taken); a shortened step of a convex quadratic still lowers the energy.
+    if (options.preventFolds && dx.norm() > 1e-3 * h) {
+      int simple[16], count = 0;
+      for (int k = vertexStart[v]; k < vertexStart[v + 1] && count < 16; ++k)
+        if (faceIsSimple(vertexFaces[k])) simple[count++] = vertexFaces[k];
+      for (int attempt = 0; count > 0; ++attempt) {
+        mesh.V.row(v) = (xv + dx).transpose();
+        bool folds = false;
+        for (int i = 0; i < count && !folds; ++i) folds = !faceIsSimple(simple[i]);
+        if (!folds) break;
+        if (attempt == 4) {
+          dx.setZero();
+          ++foldsPrevented;
+          break;
+        }
+        dx *= 0.5;
+      }
+    }
     mesh.V.row(v) = (xv + dx).transpose();
   };
   auto vertexStep = [&](double lambda) {

@@ -55,6 +55,8 @@ Options of `phex run`:
                             planarity solver: per-face planes by block coordinate descent (default,
                             fastest), per-face planes by Gauss-Newton with Schur elimination (Ceres),
                             or the paper's tetrahedron volumes by Gauss-Newton (Ceres, reference)
+  --folds prevent|allow     the local solver keeps simple faces simple (default; where only folding
+                            reaches planarity it stops short and says so) or lets them fold
   --out FILE                write the P-Hex mesh (for triangulate: the triangulation, OBJ)
   --format obj|ply|json     output format (default from the extension, else obj); json carries
                             the per-face metrics
@@ -146,7 +148,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
   json params = {{"surface", p.mesh ? p.mesh->name : p.surface}, {"method", phex::triangulationMethodName(p.method)},
                  {"field", p.field}, {"lowerBound", p.lowerBound}, {"surfaceParams", p.surfaceParams}, {"faces", p.faces}, {"cell", p.cell},
                  {"tolerance", p.tolerance}, {"lambda", p.lambda}, {"mu", p.mu}, {"maxIterations", p.maxIterations},
-                 {"duality", phex::dualityName(p.duality)}, {"solver", phex::methodName(p.solver)}};
+                 {"duality", phex::dualityName(p.duality)}, {"solver", phex::methodName(p.solver)},
+                 {"folds", p.preventFolds ? "prevent" : "allow"}};
   return {{"phex", "0.1.0"},
           {"params", params},
           {"triangulation", triangulationJson(r.triangulation, r.check)},
@@ -218,6 +221,11 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--max-iterations") p.maxIterations = parseInt(a, value());
     else if (a == "--duality") p.duality = phex::parseDuality(value());
     else if (a == "--solver") p.solver = phex::parseMethod(value());
+    else if (a == "--folds") {
+      const std::string v = value();
+      if (v != "prevent" && v != "allow") throw phex::Error(phex::ErrorCode::InvalidParameter, "--folds must be prevent or allow (got '" + v + "')");
+      p.preventFolds = v == "prevent";
+    }
     else if (a == "--out") out = value();
     else if (a == "--triangulation") tri = value();
     else if (a == "--initial") initial = value();

@@ -52,6 +52,7 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--tolerance', 'nan'], /--tolerance expects a number/],
     [['run', '--out', join(dir, 'no/such/dir/hex.obj')], /cannot open .*no\/such\/dir/],
     [['run', '--solver', 'magic'], /solver must be/],
+    [['run', '--folds', 'maybe'], /--folds must be prevent or allow/],
     [['run', '--param', 'R'], /NAME=VALUE/],
     [['frobnicate'], /unknown command/],
     [['run', '--method', 'random'], /method must be/],

@@ -131,12 +131,14 @@ TEST_CASE("pipeline: method auto tiles every analytic surface validly (the free-
     const PipelineResult r = runPipeline(p);
     INFO("invalid stars " << r.check.invalidStars.size() << ", valence 6 " << r.check.regularFraction << ", coverage "
                           << r.check.coverage << ", self-intersecting " << r.metrics.selfIntersectingCount);
-    CHECK(r.metrics.planarityMax <= 1e-9);
     if (spec.name == "freeform") {
-      // Known shortfall: umbilics on its bump tops and parabolic rings around them (see the README).
+      // Known shortfall: umbilics on its bump tops and parabolic rings around them (see the README); faces
+      // across the rings reach planarity only by folding, which the solver prevents by default.
       CHECK(r.check.invalidStars.size() <= 0.01 * r.check.interiorVertices);
+      CHECK(r.metrics.selfIntersectingCount <= 0.01 * r.metrics.faceCount);
       continue;
     }
+    CHECK(r.metrics.planarityMax <= 1e-9);
     CHECK(r.check.invalidStars.empty());
     CHECK(r.metrics.selfIntersectingCount == 0);
     CHECK(r.metrics.surfaceDistanceMax <= 0.002);

@@ -3,6 +3,8 @@
 
 #include "phex/error.hpp"
 #include "phex/metrics.hpp"
+#include "phex/duality.hpp"
+#include "phex/pipeline.hpp"
 #include "phex/planarize.hpp"
 
 using namespace phex;
@@ -43,4 +45,28 @@ TEST_CASE("planarize: bad options are rejected, cancel stops") {
   }
   m.V(0, 0) = std::nan("");
   CHECK_THROWS_WITH(planarize(m, PlanarizeOptions{}), Catch::Contains("non-finite"));
+}
+
+TEST_CASE("planarize: the local solver keeps simple faces simple unless folds are allowed") {
+  // The free-form surface's Method 2 triangulation has faces across its parabolic rings that only reach
+  // planarity by folding: with folds prevented they stay simple and planarity stops short (and says so).
+  PipelineParams p;
+  p.surface = "freeform";
+  const TriangulationStage t = triangulate(p);
+  const DualMesh dual = dupinDual(t.triangulation, *t.surface);
+  const int initialFolds = measure(dual.mesh).selfIntersectingCount;
+  PlanarizeOptions o;
+  o.surface = t.surface.get();
+  PolyMesh guarded = dual.mesh, free = dual.mesh;
+  const PlanarizeReport rg = planarize(guarded, o);
+  o.preventFolds = false;
+  const PlanarizeReport rf = planarize(free, o);
+  const int guardedFolds = measure(guarded).selfIntersectingCount, freeFolds = measure(free).selfIntersectingCount;
+  INFO("self-intersecting: initial " << initialFolds << ", guarded " << guardedFolds << " (planarity " << rg.planarityMax
+                                     << "), free " << freeFolds << " (planarity " << rf.planarityMax << ")");
+  CHECK(guardedFolds <= initialFolds);  // no face that was simple folded
+  CHECK(freeFolds > guardedFolds + 10);
+  CHECK(rf.converged);
+  CHECK(rg.converged == (rg.planarityMax <= o.tolerance));
+  CHECK(rg.planarityMax < rg.initialPlanarityMax);
 }

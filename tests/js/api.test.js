@@ -244,3 +244,13 @@ test("method 'auto' picks the field too and says which it used", async () => {
   assert.equal(named.field, 'angle:10');
   assert.equal(torus.field, ''); // the torus is laid as a lattice
 });
+
+test("folds: 'prevent' keeps faces simple, 'allow' reaches planarity by folding, anything else is named", async () => {
+  const guarded = await phex.run({ surface: 'freeform', faces: 2000 });
+  const free = await phex.run({ surface: 'freeform', faces: 2000, folds: 'allow' });
+  assert.ok(free.solve.converged);
+  assert.ok(guarded.metrics.selfIntersectingCount < free.metrics.selfIntersectingCount);
+  const error = await rejection({ surface: 'torus', folds: 'maybe' });
+  assert.equal(error.code, 'invalid_parameter');
+  assert.match(error.message, /folds/);
+});

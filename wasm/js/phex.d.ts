@@ -237,6 +237,12 @@ export interface RunParams {
    */
   solver?: 'local' | 'planes' | 'volumes';
   /**
+   * 'prevent' (default): the local solver never turns a simple face into a self-intersecting one; where a
+   * triangulation leaves that as the only way to planarity it stops short (`solve.converged` false).
+   * 'allow': faces may fold to reach the planarity goal.
+   */
+  folds?: 'prevent' | 'allow';
+  /**
    * Triangulation method: 'auto' (default: the surface's recommended method, `SurfaceSpec.method`;
    * 'prespecified' for uploaded meshes), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
    * conjugation along `field` (Method 2), 'subdivision' (Loop subdivision of a convex control mesh, §7:
@@ -251,7 +257,7 @@ export interface RunParams {
 
 /** A run parameter as listed in {@link PARAMETERS}. */
 export interface ParameterSpec {
-  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'method' | 'field' | 'lowerBound';
+  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'method' | 'field' | 'lowerBound';
   type: 'integer' | 'number' | 'enum' | 'field';
   default: number | string;
   /** Range of a number (inclusive). */

@@ -54,6 +54,7 @@ struct PipelineParams {
   int maxIterations = 100;         // Gauss-Newton iteration cap, 1 .. 10000
   Duality duality = Duality::Dupin;  // initializer of the optimization: Dupin (§6) or tangent (§4.1)
   PlanarizeMethod solver = PlanarizeMethod::LocalGlobal;  // planarity solver (see planarize.hpp)
+  bool preventFolds = true;        // the local solver keeps simple faces simple (PlanarizeOptions::preventFolds)
 };
 
 // "dupin" / "tangent" <-> Duality; parseDuality throws Error(InvalidParameter) for other names.

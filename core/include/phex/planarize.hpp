@@ -34,6 +34,12 @@ struct PlanarizeOptions {
   double tolerance = 1e-9;    // stop when max face planarity (relative to edge length) is at most this
   int maxIterations = 100;    // cap on Gauss-Newton iterations over all rounds
   const Surface* surface = nullptr;
+  // The local solver never turns a simple face into a self-intersecting one: a vertex step that would is
+  // shortened (halved, up to four times) or not taken. Where a triangulation leaves no fold-free planar
+  // mesh nearby (faces across parabolic curves of an invalid laying) planarity then stops short of the
+  // tolerance, and the report says so; false lets such faces fold to reach planarity. The Ceres solvers
+  // do not guard.
+  bool preventFolds = true;
 };
 
 struct IterationLog {
