@@ -47,6 +47,19 @@ int integer(const val& o, const char* key) {
   return static_cast<int>(d);
 }
 
+phex::Vec3 vector3(const val& o, const char* key) {
+  const val v = o[key];
+  if (!val::global("Array").call<bool>("isArray", v) || v["length"].as<unsigned>() != 3)
+    throw phex::Error(phex::ErrorCode::InvalidParameter, std::string(key) + " must be an array [x, y, z]");
+  phex::Vec3 x;
+  for (unsigned i = 0; i < 3; ++i) {
+    if (v[i].typeOf().as<std::string>() != "number")
+      throw phex::Error(phex::ErrorCode::InvalidParameter, std::string(key) + " must be an array of three numbers");
+    x[i] = v[i].as<double>();
+  }
+  return x;
+}
+
 std::string text(const val& o, const char* key) {
   if (o[key].typeOf().as<std::string>() != "string")
     throw phex::Error(phex::ErrorCode::InvalidParameter, std::string(key) + " must be a string");
@@ -78,6 +91,8 @@ phex::PipelineParams paramsFromJs(const val& o) {
   if (has(o, "method")) p.method = phex::parseTriangulationMethod(text(o, "method"));
   if (has(o, "field")) p.field = text(o, "field");
   if (has(o, "lowerBound")) p.lowerBound = number(o, "lowerBound");
+  if (has(o, "start")) p.start = vector3(o, "start");
+  if (has(o, "direction")) p.direction = vector3(o, "direction");
   if (has(o, "mesh")) {
     const val bytes = o["mesh"];
     if (!bytes.instanceof(val::global("Uint8Array")))

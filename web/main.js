@@ -49,6 +49,12 @@ function showProgress({ stage, fraction, message }) {
 
 // ---------------------------------------------------------------- form
 
+/** Reads an "x, y, z" input: empty is the default (null); anything else goes to the library to be named. */
+function pointOf(input) {
+  const text = input.value.trim();
+  return text === '' ? null : text.split(/[\s,]+/).map(Number);
+}
+
 /** Reads a number input; an empty or unparsable field is passed on as NaN, for the library to name it. */
 function numberOf(input) {
   return input.value.trim() === '' ? Number.NaN : Number(input.value);
@@ -131,7 +137,7 @@ function readParams() {
   for (const spec of FORM_PARAMS) {
     if (!supported(spec)) continue;
     const input = $(spec.name);
-    params[spec.name] = spec.type === 'integer' || spec.type === 'number' ? numberOf(input) : input.value.trim();
+    params[spec.name] = spec.type === 'integer' || spec.type === 'number' ? numberOf(input) : spec.type === 'point' ? pointOf(input) : input.value.trim();
   }
   return params;
 }
@@ -145,7 +151,10 @@ function writeForm(params) {
   const name = knownSurface(params.surface) ? params.surface : DEFAULT_SURFACE;
   $('surface').value = name;
   buildSurfaceParams(name, params.surfaceParams);
-  for (const spec of FORM_PARAMS) $(spec.name).value = String(params[spec.name] ?? spec.default);
+  for (const spec of FORM_PARAMS) {
+    const value = params[spec.name] ?? spec.default;
+    $(spec.name).value = spec.type === 'point' ? (value ?? []).join(', ') : String(value);
+  }
 }
 
 // ---------------------------------------------------------------- the design in the URL
@@ -158,7 +167,7 @@ function designToHash(params) {
   for (const [k, v] of Object.entries(params.surfaceParams ?? {})) {
     if (spec?.parameters.find((p) => p.name === k)?.default !== v) q.set(`s.${k}`, String(v));
   }
-  for (const p of FORM_PARAMS) if (params[p.name] !== undefined && params[p.name] !== p.default) q.set(p.name, String(params[p.name]));
+  for (const p of FORM_PARAMS) if (params[p.name] != null && params[p.name] !== p.default) q.set(p.name, String(params[p.name]));
   if ($('view').value !== 'hex') q.set('view', $('view').value);
   if ($('color').value !== 'planarity') q.set('color', $('color').value);
   return `#${q}`;
@@ -175,7 +184,7 @@ function designFromUrl() {
     const spec = PARAMETERS.find((p) => p.name === key);
     if (key === 'surface') params.surface = value;
     else if (key.startsWith('s.')) params.surfaceParams[key.slice(2)] = Number(value);
-    else if (spec) params[key] = spec.type === 'integer' || spec.type === 'number' ? Number(value) : value;
+    else if (spec) params[key] = spec.type === 'integer' || spec.type === 'number' ? Number(value) : spec.type === 'point' ? value.split(',').map(Number) : value;
     else if (VIEW_KEYS.includes(key)) view[key] = value;
   }
   return { params, view };

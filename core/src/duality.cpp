@@ -13,53 +13,82 @@ namespace phex {
 
 VertexRings vertexRings(const TriMesh& mesh) {
   const int nv = static_cast<int>(mesh.V.rows()), nf = static_cast<int>(mesh.F.rows());
-  // Directed edge a->b -> the triangle in which it appears (CCW). A second use means a non-manifold edge
-  // or inconsistent orientation.
-  std::unordered_map<long long, int> edgeTriangle;
-  edgeTriangle.reserve(static_cast<std::size_t>(nf) * 3);
-  auto key = [nv](int a, int b) { return static_cast<long long>(a) * nv + b; };
-  std::vector<int> anyTriangle(nv, -1);
-  for (int f = 0; f < nf; ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int a = mesh.F(f, c), b = mesh.F(f, (c + 1) % 3);
-      if (a < 0 || a >= nv || b < 0 || b >= nv || a == b)
-        throw Error(ErrorCode::InvalidInput, "triangle " + std::to_string(f) + " has an invalid vertex index");
-      if (!edgeTriangle.emplace(key(a, b), f).second)
-        throw Error(ErrorCode::InvalidInput, "edge " + std::to_string(a) + "-" + std::to_string(b) +
-                                                 " is non-manifold or inconsistently oriented");
-      anyTriangle[a] = f;
+  // Half-edge h = 3f + c runs from corner c of triangle f to corner c + 1 (CCW); F is row-major, so its start
+  // is F.data()[h]. No hashing: the half-edges are bucketed by their start (CSR), and each vertex's star is
+  // looked up in two scratch arrays indexed by the neighbour. The errors are those of reading the triangles
+  // in order: the first half-edge with an invalid index, unless a directed edge used twice (a non-manifold
+  // edge or an inconsistent orientation) is seen again before it.
+  const int* F = mesh.F.data();
+  auto next = [](int h) { return h % 3 == 2 ? h - 2 : h + 1; };
+  auto prev = [](int h) { return h % 3 == 0 ? h + 2 : h - 1; };
+  const int halfEdges = 3 * nf;
+  int limit = halfEdges;  // the half-edges before the first invalid one
+  for (int h = 0; h < halfEdges; ++h) {
+    const int a = F[h], b = F[next(h)];
+    if (a < 0 || a >= nv || b < 0 || b >= nv || a == b) {
+      limit = h;
+      break;
     }
-  auto corner = [&](int f, int v) {
-    for (int c = 0; c < 3; ++c)
-      if (mesh.F(f, c) == v) return c;
-    return -1;
-  };
+  }
+  const bool valid = limit == halfEdges;
+  std::vector<int> first(nv + 1, 0);  // the half-edges from v are out[first[v] .. first[v + 1]), in order
+  for (int h = 0; h < limit; ++h) ++first[F[h] + 1];
+  for (int v = 0; v < nv; ++v) first[v + 1] += first[v];
+  std::vector<int> out(limit);
+  {
+    std::vector<int> fill(first.begin(), first.end() - 1);
+    for (int h = 0; h < limit; ++h) out[fill[F[h]]++] = h;
+  }
+  // For the vertex v at hand: outOf[b] is v's corner (3f + c) in the triangle with the directed edge v -> b,
+  // inOf[a] its corner in the triangle with a -> v; -1 where there is none.
+  std::vector<int> outOf(nv, -1), inOf(nv, -1);
+  int repeated = limit, repeatedFrom = -1, repeatedTo = -1;  // the earliest second use of a directed edge
   VertexRings rings;
   rings.triangles.resize(nv);
   rings.closed.assign(nv, false);
   for (int v = 0; v < nv; ++v) {
-    if (anyTriangle[v] < 0) continue;
-    // Walk clockwise to the first triangle of an open fan (or once around a closed one) ...
-    int start = anyTriangle[v];
-    for (int steps = 0;; ++steps) {
-      const int c = corner(start, v);
-      const int prev = mesh.F(start, (c + 1) % 3);  // the triangle before shares edge (prev -> v)
-      auto it = edgeTriangle.find(key(prev, v));
-      if (it == edgeTriangle.end()) break;
-      if (it->second == anyTriangle[v] || steps > nf) { start = anyTriangle[v]; rings.closed[v] = true; break; }
-      start = it->second;
+    const int begin = first[v], end = first[v + 1];
+    if (begin == end) continue;
+    for (int k = begin; k < end; ++k) {
+      const int h = out[k], b = F[next(h)];
+      if (outOf[b] >= 0) {
+        if (h < repeated) repeated = h, repeatedFrom = v, repeatedTo = b;
+      } else {
+        outOf[b] = h;
+      }
+      if (valid) inOf[F[prev(h)]] = h;
     }
-    // ... then counter-clockwise, collecting the fan.
-    int f = start;
-    for (int steps = 0; steps <= nf; ++steps) {
-      rings.triangles[v].push_back(f);
-      const int c = corner(f, v);
-      const int next = mesh.F(f, (c + 2) % 3);  // the next triangle has the directed edge v -> next
-      auto it = edgeTriangle.find(key(v, next));
-      if (it == edgeTriangle.end() || it->second == start) break;
-      f = it->second;
+    if (valid && repeatedFrom < 0) {
+      const int any = out[end - 1];  // v's corner in the last triangle that has it
+      // Walk clockwise to the first triangle of an open fan (or once around a closed one) ...
+      int start = any;
+      for (int steps = 0;; ++steps) {
+        const int before = inOf[F[next(start)]];  // the triangle before shares edge (prev -> v)
+        if (before < 0) break;
+        if (before == any || steps > nf) { start = any; rings.closed[v] = true; break; }
+        start = before;
+      }
+      // ... then counter-clockwise, collecting the fan.
+      std::vector<int>& fan = rings.triangles[v];
+      fan.reserve(end - begin);
+      int h = start;
+      for (int steps = 0; steps <= nf; ++steps) {
+        fan.push_back(h / 3);
+        const int after = outOf[F[prev(h)]];  // the next triangle has the directed edge v -> next
+        if (after < 0 || after == start) break;
+        h = after;
+      }
+    }
+    for (int k = begin; k < end; ++k) {
+      const int h = out[k];
+      outOf[F[next(h)]] = -1;
+      if (valid) inOf[F[prev(h)]] = -1;
     }
   }
+  if (repeatedFrom >= 0)
+    throw Error(ErrorCode::InvalidInput, "edge " + std::to_string(repeatedFrom) + "-" + std::to_string(repeatedTo) +
+                                             " is non-manifold or inconsistently oriented");
+  if (!valid) throw Error(ErrorCode::InvalidInput, "triangle " + std::to_string(limit / 3) + " has an invalid vertex index");
   return rings;
 }
 
@@ -133,11 +162,14 @@ DualMesh assembleDual(const TriMesh& T, const Points& U, const std::vector<Local
     }
     return triangleId[f];
   };
-  std::unordered_map<long long, int> edgeId;
-  auto edgeVertex = [&](int a, int b) {
-    const long long key = static_cast<long long>(std::min(a, b)) * nv + std::max(a, b);
-    auto [it, added] = edgeId.emplace(key, static_cast<int>(points.size()));
+  // The point of each boundary edge, by the edge's one half-edge h = 3f + c (corner c to c + 1 of triangle f):
+  // a boundary edge has no twin, so its two faces (one per end) name it alike. No hashing; filled on demand.
+  std::vector<int> edgeId;
+  auto edgeVertex = [&](int a, int b, int h) {
+    if (edgeId.empty()) edgeId.assign(3 * static_cast<std::size_t>(nf), -1);
+    const bool added = edgeId[h] < 0;
     if (added) {
+      edgeId[h] = static_cast<int>(points.size());
       Eigen::Matrix3d N;
       N << geo[a].normal.transpose(), geo[b].normal.transpose(), Vec3::Zero().transpose();
       const Vec3 d(geo[a].normal.dot(geo[a].point), geo[b].normal.dot(geo[b].point), 0.0);
@@ -147,7 +179,7 @@ DualMesh assembleDual(const TriMesh& T, const Points& U, const std::vector<Local
       points.push_back(x);
       dual.vertexTriangle.push_back(-1);
     }
-    return it->second;
+    return edgeId[h];
   };
   auto corner = [&](int f, int v) {
     int k = 0;
@@ -162,11 +194,13 @@ DualMesh assembleDual(const TriMesh& T, const Points& U, const std::vector<Local
     if (rings.closed[v]) {
       for (int f : fan) ids.push_back(triangleVertex(f));
     } else {
-      const int first = T.F(fan.front(), (corner(fan.front(), v) + 1) % 3);  // boundary edge v -> first
-      const int last = T.F(fan.back(), (corner(fan.back(), v) + 2) % 3);     // boundary edge v -> last
-      ids.push_back(edgeVertex(v, first));
+      const int kFirst = corner(fan.front(), v), kLast = (corner(fan.back(), v) + 2) % 3;
+      const int first = T.F(fan.front(), (kFirst + 1) % 3);  // boundary edge v -> first (half-edge at kFirst)
+      const int last = T.F(fan.back(), kLast);                // boundary edge v -> last (half-edge last -> v)
+      ids.push_back(edgeVertex(v, first, 3 * fan.front() + kFirst));
       for (int f : fan) ids.push_back(triangleVertex(f));
-      ids.push_back(edgeVertex(v, last));
+      ids.push_back(edgeVertex(v, last, 3 * fan.back() + kLast));
+
       double fanAngle = 0;
       for (int f : fan) {
         const int k = corner(f, v);

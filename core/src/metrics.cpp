@@ -78,8 +78,9 @@ bool polygonSelfIntersects(const std::vector<Vec2>& p) {
 namespace {
 
 // The face's corners in its least-squares plane `pl`, centred at their centroid, counterclockwise in the
-// face's own orientation (the plane's normal is turned like the face's vector area).
-std::vector<Vec2> planarCorners(const PolyMesh& mesh, int face, const FacePlane& pl) {
+// face's own orientation (the plane's normal is turned like the face's vector area). Into `p`, whose
+// storage measureAll reuses from face to face.
+void planarCorners(const PolyMesh& mesh, int face, const FacePlane& pl, std::vector<Vec2>& p) {
   const int n = mesh.faceSize(face);
   const int* ids = mesh.face(face);
   Vec3 normal = pl.normal;
@@ -88,11 +89,16 @@ std::vector<Vec2> planarCorners(const PolyMesh& mesh, int face, const FacePlane&
   if (area.dot(normal) < 0) normal = -normal;
   const Vec3 ex = (std::abs(normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(normal).normalized();
   const Vec3 ey = normal.cross(ex);
-  std::vector<Vec2> p(n);
+  p.resize(n);
   for (int i = 0; i < n; ++i) {
     const Vec3 d = mesh.vertex(ids[i]) - pl.centroid;
     p[i] = Vec2(d.dot(ex), d.dot(ey));
   }
+}
+
+std::vector<Vec2> planarCorners(const PolyMesh& mesh, int face, const FacePlane& pl) {
+  std::vector<Vec2> p;
+  planarCorners(mesh, face, pl, p);
   return p;
 }
 
@@ -102,11 +108,12 @@ double signedArea(const std::vector<Vec2>& p) {
   return 0.5 * a;
 }
 
-bool isConvex(const std::vector<Vec2>& p) {
+// Every turn to the left and no crossing; `selfIntersecting` is polygonSelfIntersects(p), known already.
+bool isConvex(const std::vector<Vec2>& p, bool selfIntersecting) {
   const int n = static_cast<int>(p.size());
   for (int i = 0; i < n; ++i)
     if (cross2(p[(i + 1) % n] - p[i], p[(i + 2) % n] - p[(i + 1) % n]) < 0) return false;
-  return !polygonSelfIntersects(p);
+  return !selfIntersecting;
 }
 
 }  // namespace
@@ -200,13 +207,15 @@ MeshMetrics measureAll(const PolyMesh& mesh, const Surface* surface) {
     }
     m.surfaceDistanceMean = m.vertexCount ? distanceSum / m.vertexCount : 0.0;
   }
+  std::vector<Vec2> corners;
   for (int f = 0; f < m.faceCount; ++f) {
+    // The face's plane, its corners in it and whether they cross: each computed once, shared by the measures.
     const FacePlane plane = leastSquaresPlane(mesh, f);
-    const std::vector<Vec2> corners = planarCorners(mesh, f, plane);
+    planarCorners(mesh, f, plane, corners);
     m.planarity[f] = planarityAgainst(mesh, f, plane);
     m.planarityDiagonals[f] = facePlanarityDiagonals(mesh, f);
     m.selfIntersecting[f] = polygonSelfIntersects(corners) ? 1 : 0;
-    m.convex[f] = isConvex(corners) ? 1 : 0;
+    m.convex[f] = isConvex(corners, m.selfIntersecting[f] != 0) ? 1 : 0;
     m.faceArea[f] = std::abs(signedArea(corners));
     m.faceAreaMin = std::min(m.faceAreaMin, m.faceArea[f]);
     m.faceAreaMax = std::max(m.faceAreaMax, m.faceArea[f]);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "phex/error.hpp"
@@ -100,6 +101,9 @@ void validate(const PipelineParams& p) {
   if (p.maxIterations < 1 || p.maxIterations > 10000)
     fail("maxIterations must be between 1 and 10000 (got " + std::to_string(p.maxIterations) + ")");
   if (!(p.lowerBound >= 0 && p.lowerBound <= 2)) fail("lowerBound must be in [0, 2] (got " + number(p.lowerBound) + ")");
+  if (p.start && !p.start->allFinite()) fail("start must be a point of three finite numbers");
+  if (p.direction && (!p.direction->allFinite() || !(p.direction->norm() > 0)))
+    fail("direction must be a non-zero vector of three finite numbers");
   if (p.method != TriangulationMethod::Subdivision) parseFieldSpec(p.field);
   if (p.mesh && p.mesh->bytes.empty()) fail("the uploaded mesh '" + p.mesh->name + "' is empty (0 bytes)");
   if (p.mesh && p.method == TriangulationMethod::Lattice)
@@ -136,6 +140,66 @@ TriangulationMethod resolveMethod(const PipelineParams& params) {
     if (s.name == params.surface) return parseTriangulationMethod(s.method);
   return TriangulationMethod::Progressive;  // makeSurface names the unknown surface
 }
+
+namespace {
+
+// Where L0 should start when the caller did not say. The middle of the bounds, projected, suits a patch;
+// on a ring (torus, cyclide, their meshes) it lands on the inner side, where rows along the parallels
+// must be resampled as they grow and cross the parabolic circles badly. So a few candidates — that point,
+// and the most elliptic and the most hyperbolic of some 150 samples of the surface — are laid at a
+// quarter of the size (at most 2500 faces), and the one whose triangulation covers most of the surface
+// with the fewest invalid stars and self-intersecting faces of its Dupin dual wins.
+std::optional<Vec3> chooseStart(const Surface& surface, const LayingOptions& options, int faces,
+                                const CancelFlag* cancel, std::string& note) {
+  std::vector<LocalGeometry> samples;
+  if (const auto* p = dynamic_cast<const ParametricSurface*>(&surface)) {
+    const auto d = p->domain();
+    for (int i = 0; i < 12; ++i)
+      for (int j = 0; j < 12; ++j)
+        samples.push_back(p->geometryAt(d.u0 + (d.u1 - d.u0) * (i + 0.5) / 12, d.v0 + (d.v1 - d.v0) * (j + 0.5) / 12));
+  } else if (const auto* m = dynamic_cast<const MeshSurface*>(&surface)) {
+    const auto& V = m->mesh().V;
+    const Eigen::Index step = std::max<Eigen::Index>(1, V.rows() / 150);
+    for (Eigen::Index v = 0; v < V.rows(); v += step) samples.push_back(surface.closestPoint(V.row(v).transpose()));
+  }
+  if (samples.empty()) return std::nullopt;
+  std::vector<Vec3> candidates = {surface.bounds().center()};
+  const auto byK = [](const LocalGeometry& a, const LocalGeometry& b) { return a.gaussianCurvature() < b.gaussianCurvature(); };
+  const LocalGeometry& most = *std::max_element(samples.begin(), samples.end(), byK);
+  const LocalGeometry& least = *std::min_element(samples.begin(), samples.end(), byK);
+  if (most.gaussianCurvature() > 0) candidates.push_back(most.point);
+  if (least.gaussianCurvature() < 0) candidates.push_back(least.point);
+  LayingOptions trial = options;
+  const int trialFaces = std::clamp(faces / 4, 50, 2500);
+  trial.cell = options.cell * std::sqrt(double(faces) / trialFaces);
+  double bestScore = -std::numeric_limits<double>::infinity();
+  std::optional<Vec3> best;
+  int laid = 0;
+  for (const Vec3& c : candidates) {
+    trial.start = c;
+    Triangulation t;
+    try {
+      t = layTriangulation(surface, trial, {}, cancel);
+    } catch (const Error& e) {
+      if (e.code() == ErrorCode::Cancelled) throw;
+      continue;  // this start cannot be laid from; the others may
+    }
+    ++laid;
+    const TriangulationCheck check = checkTriangulation(t, surface);
+    const int folded = measure(dupinDual(t, surface).mesh).selfIntersectingCount;
+    const double bad = double(check.invalidStars.size() + folded) / std::max<Eigen::Index>(t.mesh.V.rows(), 1);
+    const double score = (check.coverage >= 0 ? check.coverage : 1.0) - 5 * bad;
+    if (score > bestScore) bestScore = score, best = c;
+  }
+  if (laid < 2 || !best) return std::nullopt;  // nothing to choose between: the default start
+  std::ostringstream s;
+  s << "start chosen among " << laid << " candidates by trial lays at about " << trialFaces << " faces: near ("
+    << best->x() << ", " << best->y() << ", " << best->z() << ")";
+  note = s.str();
+  return best;
+}
+
+}  // namespace
 
 std::string resolveField(const PipelineParams& params) {
   if (params.method != TriangulationMethod::Auto || params.mesh || params.field != "principal") return params.field;
@@ -186,6 +250,10 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       lo.field = params.field;
       lo.cell = cell;
       lo.lowerBound = params.lowerBound;
+      lo.start = params.start;
+      lo.baseDirection = params.direction;
+      std::string startNote;
+      if (!lo.start) lo.start = chooseStart(*t.surface, lo, params.faces, cancel, startNote);
       t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
       // Layers of ideal triangles are not equilateral, and they may leave parts of the surface uncovered, so
       // the vertex count (one hexagon each) differs from the area estimate. When a face count was asked for
@@ -212,6 +280,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
         counts[attempt] = double(again.mesh.V.rows());
         if (miss(again) < miss(t.triangulation)) t.triangulation = std::move(again);
       }
+      if (!startNote.empty()) t.triangulation.notes.insert(t.triangulation.notes.begin(), startNote);
     }
   }
   t.check = checkTriangulation(t.triangulation, *t.surface);

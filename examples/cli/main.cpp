@@ -44,6 +44,9 @@ Options of `phex run`:
   --field SPEC              direction field: principal (default; under --method auto the surface's
                             recommended field), angle:DEG, param, radial, diverging[:DEG], spiral[:DEG]
   --lower-bound B           §5.3 lower bound on the step ratio |CM|/|AB|, 0..2 (default 0.3; 0 off)
+  --start X,Y,Z             where the base curve L0 starts (a point near the surface; default: the
+                            middle of its bounds, projected)
+  --direction X,Y,Z         which way L0 runs at the start (default: along the smaller normal curvature)
   --faces N                 wanted number of hexagons, 12..1000000 (default 2000)
   --cell H                  wanted edge length of the triangulation instead of --faces
   --tolerance T             planarity goal relative to edge length (default 1e-9)
@@ -150,6 +153,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                  {"tolerance", p.tolerance}, {"lambda", p.lambda}, {"mu", p.mu}, {"maxIterations", p.maxIterations},
                  {"duality", phex::dualityName(p.duality)}, {"solver", phex::methodName(p.solver)},
                  {"folds", p.preventFolds ? "prevent" : "allow"}};
+  if (p.start) params["start"] = {p.start->x(), p.start->y(), p.start->z()};
+  if (p.direction) params["direction"] = {p.direction->x(), p.direction->y(), p.direction->z()};
   return {{"phex", "0.1.0"},
           {"params", params},
           {"triangulation", triangulationJson(r.triangulation, r.check)},
@@ -193,6 +198,19 @@ phex::MeshInput readInput(const std::string& path) {
 }
 
 // `phex run` and `phex triangulate` (which stops after the first stage) share their options.
+// "X,Y,Z" -> a vector, for --start and --direction.
+phex::Vec3 parseVector(const std::string& opt, const std::string& text) {
+  phex::Vec3 v;
+  std::size_t from = 0;
+  for (int k = 0; k < 3; ++k) {
+    const std::size_t comma = text.find(',', from);
+    if ((k < 2) != (comma != std::string::npos)) usage(opt + " expects X,Y,Z, got '" + text + "'");
+    v[k] = parseNumber(opt, text.substr(from, k < 2 ? comma - from : std::string::npos));
+    from = comma + 1;
+  }
+  return v;
+}
+
 int run(const std::vector<std::string>& args, bool triangulateOnly) {
   phex::PipelineParams p;
   std::string out, tri, initial, reportPath, format;
@@ -208,6 +226,8 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--method") p.method = phex::parseTriangulationMethod(value());
     else if (a == "--field") p.field = value();
     else if (a == "--lower-bound") p.lowerBound = parseNumber(a, value());
+    else if (a == "--start") p.start = parseVector(a, value());
+    else if (a == "--direction") p.direction = parseVector(a, value());
     else if (a == "--param") {
       const std::string& kv = value();
       const auto eq = kv.find('=');

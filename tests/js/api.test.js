@@ -189,6 +189,7 @@ test('PARAMETERS documents every run parameter with its default and range', () =
   for (const p of PARAMETERS) {
     assert.ok(p.description.length > 10, p.name);
     if (p.type === 'enum') assert.ok(p.values.includes(p.default), p.name);
+    else if (p.type === 'point') assert.equal(p.default, null, p.name);
     else if (p.type !== 'field') assert.ok(p.min <= p.default && p.default <= p.max, p.name);
   }
 });
@@ -253,4 +254,21 @@ test("folds: 'prevent' keeps faces simple, 'allow' reaches planarity by folding,
   const error = await rejection({ surface: 'torus', folds: 'maybe' });
   assert.equal(error.code, 'invalid_parameter');
   assert.match(error.message, /folds/);
+});
+
+test('start and direction set where and which way the base curve runs; bad ones are named', async () => {
+  const outer = await phex.run({ surface: 'torus', method: 'prespecified', faces: 800, start: [1.4, 0, 0], direction: [0, 1, 0] });
+  assert.match(outer.triangulation.notes[0], /L0 closed/);
+  assert.ok(!outer.triangulation.notes.some((n) => /start chosen/.test(n)), 'a given start is used as is');
+  const auto = await phex.run({ surface: 'torus', method: 'prespecified', faces: 800, start: null });
+  assert.match(auto.triangulation.notes[0], /start chosen among/);
+  for (const [params, message] of [
+    [{ surface: 'torus', start: [1, 2] }, /start must be an array of three finite numbers/],
+    [{ surface: 'torus', direction: 'up' }, /direction must be an array/],
+    [{ surface: 'torus', direction: [0, 0, Number.NaN] }, /direction must be an array of three finite numbers/],
+  ]) {
+    const error = await rejection(params);
+    assert.equal(error.code, 'invalid_parameter');
+    assert.match(error.message, message);
+  }
 });

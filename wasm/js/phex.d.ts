@@ -241,6 +241,10 @@ export interface RunParams {
    * triangulation leaves that as the only way to planarity it stops short (`solve.converged` false).
    * 'allow': faces may fold to reach the planarity goal.
    */
+  /** Where the conjugate methods start their base curve L0: a point near the surface (default: chosen by trial lays). */
+  start?: [number, number, number] | null;
+  /** Which way L0 runs at the start, projected onto the tangent plane (default: along the smaller normal curvature). */
+  direction?: [number, number, number] | null;
   folds?: 'prevent' | 'allow';
   /**
    * Triangulation method: 'auto' (default: the surface's recommended method, `SurfaceSpec.method`;
@@ -257,9 +261,10 @@ export interface RunParams {
 
 /** A run parameter as listed in {@link PARAMETERS}. */
 export interface ParameterSpec {
-  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'method' | 'field' | 'lowerBound';
-  type: 'integer' | 'number' | 'enum' | 'field';
-  default: number | string;
+  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound';
+  /** 'point': an [x, y, z] array, or null for the default. */
+  type: 'integer' | 'number' | 'enum' | 'field' | 'point';
+  default: number | string | null;
   /** Range of a number (inclusive). */
   min?: number;
   max?: number;

@@ -33,6 +33,8 @@ export const PARAMETERS = Object.freeze([
   { name: 'folds', type: 'enum', default: 'prevent', values: ['prevent', 'allow'], description: "The local solver never turns a simple face into a self-intersecting one ('prevent'; where that is the only way to planarity it stops short and says so), or lets faces fold to reach the planarity goal ('allow')." },
   { name: 'method', type: 'enum', default: 'auto', values: ['auto', 'progressive', 'prespecified', 'subdivision', 'lattice'], requires: 'methods', description: "Triangulation: 'auto' (the surface's recommended method, see surfaces(); pre-specified for uploaded meshes), progressive conjugation (§5.2 Method 1), pre-specified conjugation along a field (§5.2 Method 2), Loop subdivision of a convex control mesh (§7), or the parameter lattice." },
   { name: 'field', type: 'field', default: 'principal', values: ['principal', 'angle:DEG', 'param', 'radial', 'diverging', 'spiral'], requires: 'fields', description: "Direction field of the conjugate methods (§5.2): principal directions (under method 'auto', the surface's recommended field, see surfaces()), a fixed angle to them ('angle:30'), parameter lines, radial, diverging or spiral." },
+  { name: 'start', type: 'point', default: null, description: 'Where the conjugate methods start their base curve L0: a point [x, y, z] near the surface. Default (null): chosen by trial lays among the middle of the bounds and the most elliptic and hyperbolic points.' },
+  { name: 'direction', type: 'point', default: null, description: 'Which way L0 runs at the start: a vector [x, y, z], projected onto the tangent plane (the nearer family of the network). Default (null): along the smaller normal curvature.' },
   { name: 'lowerBound', type: 'number', default: 0.3, min: 0, max: 2, requires: 'lowerBound', description: 'Lower bound b on the step ratio |CM|/|AB| near parabolic curves (§5.3), applied smoothly; 0 turns it off.' },
 ]);
 
@@ -89,7 +91,7 @@ function checkParams(params, capabilities) {
   const out = {};
   for (const [name, value] of Object.entries(params)) {
     if (!known.includes(name)) throw invalid(`unknown parameter '${name}' (known: ${known.join(', ')})`);
-    if (value === undefined) continue;
+    if (value === undefined || (value === null && PARAMETER[name]?.type === 'point')) continue;  // the default
     const spec = PARAMETER[name];
     if (name === 'surface') {
       if (typeof value !== 'string' || value === '') throw invalid(`surface must be a surface name, got ${describe(value)}`);
@@ -109,6 +111,10 @@ function checkParams(params, capabilities) {
     } else if (spec.type === 'enum') {
       if (!spec.values.includes(value)) throw invalid(`${name} must be one of ${spec.values.join(', ')}, got ${describe(value)}`);
       checkSupported(spec, value, capabilities);
+    } else if (spec.type === 'point') {
+      if (!Array.isArray(value) || value.length !== 3 || !value.every((x) => typeof x === 'number' && Number.isFinite(x))) {
+        throw invalid(`${name} must be an array of three finite numbers [x, y, z], got ${describe(value)}`);
+      }
     } else if (spec.type === 'field') {
       if (typeof value !== 'string' || !FIELD_PATTERN.test(value)) {
         throw invalid(`field must be one of principal, angle:DEG (e.g. angle:30), param, radial, diverging, spiral; got ${describe(value)}`);
@@ -123,6 +129,7 @@ function checkParams(params, capabilities) {
       checkSupported(spec, value, capabilities);
     }
     if (name === 'surfaceParams') out[name] = { ...value };
+    else if (spec?.type === 'point') out[name] = [...value];
     else if (name === 'mesh') out[name] = value instanceof ArrayBuffer ? new Uint8Array(value) : value;
     else out[name] = value;
   }

@@ -46,6 +46,11 @@ struct PipelineParams {
   TriangulationMethod method = TriangulationMethod::Auto;
   std::string field = "principal"; // direction field of the conjugate methods (see parseFieldSpec, resolveField)
   double lowerBound = 0.3;         // §5.3 step-ratio lower bound b, in [0, 2]; 0 disables it
+  // Where the conjugate methods start their base curve L0 (a point near the surface; default: the middle of
+  // its bounds, projected) and which way L0 runs there (a vector, projected onto the tangent plane: the
+  // family of the network closest to it; default: the family of smaller normal curvature).
+  std::optional<Vec3> start;
+  std::optional<Vec3> direction;
   int faces = 2000;                // wanted number of hexagons, 12 .. kMaxFaces (ignored when cell > 0)
   double cell = 0.0;               // wanted edge length of the triangulation, in model units (0: use faces)
   double tolerance = 1e-9;         // planarity goal, relative to edge length, in (0, 0.1]
