@@ -147,7 +147,7 @@ namespace {
 // on a ring (torus, cyclide, their meshes) it lands on the inner side, where rows along the parallels
 // must be resampled as they grow and cross the parabolic circles badly. So a few candidates — that point,
 // and the most elliptic and the most hyperbolic of some 150 samples of the surface — are laid at a
-// quarter of the size (at most 2500 faces), and the one whose triangulation covers most of the surface
+// quarter of the size (at most 1000 faces), and the one whose triangulation covers most of the surface
 // with the fewest invalid stars and self-intersecting faces of its Dupin dual wins.
 std::optional<Vec3> chooseStart(const Surface& surface, const LayingOptions& options, int faces,
                                 const CancelFlag* cancel, std::string& note) {
@@ -170,7 +170,7 @@ std::optional<Vec3> chooseStart(const Surface& surface, const LayingOptions& opt
   if (most.gaussianCurvature() > 0) candidates.push_back(most.point);
   if (least.gaussianCurvature() < 0) candidates.push_back(least.point);
   LayingOptions trial = options;
-  const int trialFaces = std::clamp(faces / 4, 50, 2500);
+  const int trialFaces = std::clamp(faces / 4, 50, 1000);
   trial.cell = options.cell * std::sqrt(double(faces) / trialFaces);
   double bestScore = -std::numeric_limits<double>::infinity();
   std::optional<Vec3> best;
