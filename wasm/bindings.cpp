@@ -169,6 +169,7 @@ val resultToJs(const phex::PipelineResult& r) {
   metrics.set("convexityMismatch", copyArray("Uint8Array", m.convexityMismatch.data(), m.convexityMismatch.size()));
   metrics.set("convexityMismatchCount", m.convexityMismatchCount);
   metrics.set("parabolicFaceCount", m.parabolicFaceCount);
+  metrics.set("interiorHexagonFraction", r.interiorHexagonFraction);
   metrics.set("regularity", copyArray("Float64Array", m.regularity.data(), m.regularity.size()));
   metrics.set("regularityMean", m.regularityMean);
   metrics.set("boundaryFace", copyArray("Uint8Array", r.dual.boundaryFace.data(), r.dual.boundaryFace.size()));

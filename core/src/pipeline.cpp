@@ -332,6 +332,10 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
 
   report("measure", 0, "measuring");
   r.metrics = measure(r.hex, surface);
+  int interior = 0, hexagons = 0;
+  for (int f = 0; f < r.hex.faceCount(); ++f)
+    if (!r.dual.boundaryFace[f]) ++interior, hexagons += r.hex.faceSize(f) == 6;
+  r.interiorHexagonFraction = interior ? double(hexagons) / interior : 0.0;
   clock.done("measure");
   r.totalMilliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (progress) progress({"done", 1, "done"});

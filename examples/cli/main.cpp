@@ -165,6 +165,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                          {"initialMax", r.solve.initialPlanarityMax}}},
           {"invalidFaces", r.metrics.selfIntersectingCount},
           {"boundaryFaces", std::count(r.dual.boundaryFace.begin(), r.dual.boundaryFace.end(), 1)},
+          {"interiorHexagonFraction", r.interiorHexagonFraction},
           {"convexityMismatches", r.metrics.convexityMismatchCount},
           {"parabolicFaces", r.metrics.parabolicFaceCount},
           {"regularityMean", r.metrics.regularityMean},

@@ -150,6 +150,7 @@ TEST_CASE("pipeline: method auto tiles every analytic surface validly (the free-
     CHECK(r.metrics.selfIntersectingCount <= 0.001 * r.metrics.faceCount);
     CHECK(r.metrics.surfaceDistanceMax <= 0.002);
     CHECK(r.check.regularFraction >= 0.95);
+    CHECK(r.interiorHexagonFraction >= 0.9);
     CHECK(r.check.coverage >= 0.8);
     CHECK(r.metrics.faceCount >= 0.75 * p.faces);
     CHECK(r.metrics.faceCount <= 1.25 * p.faces);

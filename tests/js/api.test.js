@@ -241,6 +241,7 @@ test("method 'auto' picks the field too and says which it used", async () => {
   assert.equal(r.field, 'param');
   assert.equal(r.triangulation.check.invalidStars.length, 0);
   assert.equal(typeof r.metrics.parabolicFaceCount, 'number');
+  assert.ok(r.metrics.interiorHexagonFraction >= 0.9, String(r.metrics.interiorHexagonFraction));
   const named = await phex.run({ surface: 'elliptic-paraboloid', faces: 600, method: 'prespecified', field: 'angle:10' });
   assert.equal(named.field, 'angle:10');
   assert.equal(torus.field, ''); // the torus is laid as a lattice

@@ -106,6 +106,8 @@ export interface Metrics {
   convexityMismatchCount?: number;
   /** Faces across a parabolic curve (their corners lie where K has another sign): not judged for convexity. */
   parabolicFaceCount?: number;
+  /** Hexagons among the faces not on the boundary (a P-Hex mesh's goal: ≥ 0.9). */
+  interiorHexagonFraction: number;
   /** Per face: affine regularity in [0, 1] (1 for an affine regular hexagon). */
   regularity?: Float64Array;
   regularityMean?: number;

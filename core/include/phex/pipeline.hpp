@@ -81,6 +81,7 @@ struct PipelineResult {
   PolyMesh hex;                // the P-Hex mesh
   DualMesh dual;               // bookkeeping of the dual (which vertex / triangle each element comes from)
   MeshMetrics metrics;         // of `hex`
+  double interiorHexagonFraction = 0.0;  // hexagons among the faces not on the boundary (dual.boundaryFace)
   PlanarizeReport solve;
   std::vector<StageTiming> timings;
   double totalMilliseconds = 0.0;
