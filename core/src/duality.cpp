@@ -3,7 +3,6 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
-#include <unordered_map>
 
 #include "phex/dupin.hpp"
 #include "phex/error.hpp"

@@ -50,33 +50,40 @@ IdealApex idealApex(const LocalGeometry& g, const Vec2& A, const Vec2& B, Side s
   return r;
 }
 
-bool starIsValid(const LocalGeometry& g, const Triangle2& t) {
+StarValidity starValidity(const LocalGeometry& g, const Triangle2& t) {
+  StarValidity r;
   const Vec2 e0 = t[1] - t[0], e1 = t[2] - t[1], e2 = t[0] - t[2];
   const double area2 = cross(e0, -e2);
-  if (!(std::abs(area2) > 1e-12 * e0.norm() * e2.norm())) return false;
+  if (!(std::abs(area2) > 1e-12 * e0.norm() * e2.norm())) return r;
   const double K = g.k1 * g.k2;
   if (K > 0) {
     // Prop. 4: the Dupin centre strictly inside t (all barycentric coordinates positive).
     const std::optional<Vec2> m = dupinCenter(g, t[0], t[1], t[2]);
-    if (!m) return false;
-    const double b0 = cross(t[1] - *m, t[2] - *m) / area2;
-    const double b1 = cross(t[2] - *m, t[0] - *m) / area2;
-    const double b2 = cross(t[0] - *m, t[1] - *m) / area2;
-    return b0 > 0 && b1 > 0 && b2 > 0;
+    if (!m) return r;
+    r.measures = {cross(t[1] - *m, t[2] - *m) / area2, cross(t[2] - *m, t[0] - *m) / area2,
+                  cross(t[0] - *m, t[1] - *m) / area2};
+    r.judged = true;
+    r.valid = r.measures[0] > 0 && r.measures[1] > 0 && r.measures[2] > 0;
+    return r;
   }
   if (K < 0) {
     // Prop. 5 (3): the asymptotic lines split the edge directions into II > 0 and II < 0; an edge on an
     // asymptote has no circumscribing Dupin hyperbola at all.
-    int positive = 0, negative = 0;
+    const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
+    int positive = 0, negative = 0, k = 0;
     for (const Vec2& e : {e0, e1, e2}) {
       const double q = secondFundamentalForm(g, e, e);
       positive += q > 0;
       negative += q < 0;
+      r.measures[k++] = q / (kmax * e.squaredNorm());
     }
-    return positive > 0 && negative > 0 && positive + negative == 3;
+    r.judged = true;
+    r.valid = positive > 0 && negative > 0 && positive + negative == 3;
   }
-  return false;
+  return r;
 }
+
+bool starIsValid(const LocalGeometry& g, const Triangle2& t) { return starValidity(g, t).valid; }
 
 std::array<Vec2, 6> triangleStar(const Vec2& a, const Vec2& b) { return {a, b, b - a, -a, -b, a - b}; }
 

@@ -982,11 +982,7 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
   }
   if (options.repairSweeps > 0) {
     checkCancel(cancel);
-    const RepairResult r = repairStars(t, surface, options.repairSweeps);
-    if (r.invalidBefore > 0)
-      t.notes.push_back("repaired " + std::to_string(r.invalidBefore - r.invalidAfter) + " of " +
-                        std::to_string(r.invalidBefore) + " invalid stars by moving " + std::to_string(r.moved) +
-                        " vertices within the surface (" + std::to_string(r.sweeps) + " sweeps)");
+    repairStars(t, surface, options.repairSweeps);
   }
   if (progress) progress({"triangulate", 1.0, std::to_string(t.mesh.F.rows()) + " triangles laid"});
   return t;

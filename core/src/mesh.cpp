@@ -12,6 +12,19 @@ void PolyMesh::addFace(const std::vector<int>& ids) {
   offsets.push_back(static_cast<int>(indices.size()));
 }
 
+double TriMesh::meanEdgeLength() const {
+  double sum = 0.0;
+  for (int f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) sum += (V.row(F(f, k)) - V.row(F(f, (k + 1) % 3))).norm();
+  return F.rows() ? sum / (3.0 * F.rows()) : 0.0;
+}
+
+double TriMesh::area() const {
+  double a = 0;
+  for (int f = 0; f < F.rows(); ++f) a += 0.5 * (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).norm();
+  return a;
+}
+
 double PolyMesh::meanEdgeLength() const {
   double sum = 0.0;
   long count = 0;

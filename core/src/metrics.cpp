@@ -122,6 +122,10 @@ bool faceSelfIntersects(const PolyMesh& mesh, int face) {
   return polygonSelfIntersects(planarCorners(mesh, face, leastSquaresPlane(mesh, face)));
 }
 
+bool faceSelfIntersects(const PolyMesh& mesh, int face, const Vec3& normal) {
+  return polygonSelfIntersects(planarCorners(mesh, face, FacePlane{Vec3::Zero(), normal}));
+}
+
 double facePlanarityDiagonals(const PolyMesh& mesh, int face) {
   const int n = mesh.faceSize(face);
   if (n < 4) return 0.0;

@@ -133,12 +133,22 @@ SurfacePreview surfacePreview(const PipelineParams& params) {
   return out;
 }
 
+namespace {
+
+// The analytic surface's spec, for what `auto` recommends; nullptr for other names (makeSurface names them).
+const SurfaceSpec* analyticSpec(const std::string& name) {
+  for (const SurfaceSpec& s : analyticSurfaces())
+    if (s.name == name) return &s;
+  return nullptr;
+}
+
+}  // namespace
+
 TriangulationMethod resolveMethod(const PipelineParams& params) {
   if (params.method != TriangulationMethod::Auto) return params.method;
   if (params.mesh) return TriangulationMethod::Prespecified;
-  for (const SurfaceSpec& s : analyticSurfaces())
-    if (s.name == params.surface) return parseTriangulationMethod(s.method);
-  return TriangulationMethod::Progressive;  // makeSurface names the unknown surface
+  const SurfaceSpec* spec = analyticSpec(params.surface);
+  return spec ? parseTriangulationMethod(spec->method) : TriangulationMethod::Progressive;
 }
 
 namespace {
@@ -205,9 +215,8 @@ std::optional<Vec3> chooseStart(const Surface& surface, const LayingOptions& opt
 
 std::string resolveField(const PipelineParams& params) {
   if (params.method != TriangulationMethod::Auto || params.mesh || params.field != "principal") return params.field;
-  for (const SurfaceSpec& s : analyticSurfaces())
-    if (s.name == params.surface) return s.field;
-  return params.field;
+  const SurfaceSpec* spec = analyticSpec(params.surface);
+  return spec ? spec->field : params.field;
 }
 
 TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel) {
@@ -241,11 +250,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
     const double cell = checkCell(*t.surface);
     if (params.method == TriangulationMethod::Lattice) {
       t.triangulation = latticeTriangulation(dynamic_cast<const ParametricSurface&>(*t.surface), cell);
-      const RepairResult repaired = repairStars(t.triangulation, *t.surface);
-      if (repaired.invalidBefore > 0)
-        t.triangulation.notes.push_back("repaired " + std::to_string(repaired.invalidBefore - repaired.invalidAfter) +
-                                        " of " + std::to_string(repaired.invalidBefore) + " invalid stars by moving " +
-                                        std::to_string(repaired.moved) + " vertices within the surface");
+      repairStars(t.triangulation, *t.surface);
     } else {
       LayingOptions lo;
       lo.method = params.method == TriangulationMethod::Progressive ? LayingMethod::Progressive : LayingMethod::Prespecified;

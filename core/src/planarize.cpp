@@ -258,18 +258,7 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
   };
   std::vector<LocalGeometry> feet(options.mu > 0 ? nv : 0);
   // Whether face f, projected onto its current plane, is a simple polygon.
-  std::vector<Vec2> polygon;
-  auto faceIsSimple = [&](int f) {
-    if (faceScale[f] == 0) return true;
-    const Vec3 n = normal[f];
-    const Vec3 a = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized(), b = n.cross(a);
-    polygon.clear();
-    for (int i = 0; i < mesh.faceSize(f); ++i) {
-      const Vec3 p = mesh.vertex(mesh.face(f)[i]);
-      polygon.emplace_back(p.dot(a), p.dot(b));
-    }
-    return !polygonSelfIntersects(polygon);
-  };
+  auto faceIsSimple = [&](int f) { return faceScale[f] == 0 || !faceSelfIntersects(mesh, f, normal[f]); };
   long foldsPrevented = 0;
   // The vertex step: every vertex moved to the minimizer of its own terms for the current planes.
   auto moveVertex = [&](int v, double lambda) {

@@ -16,48 +16,31 @@
 namespace phex {
 namespace {
 
-double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
-
 // Below these the star is valid but close to the edge of validity; the repair prefers positions above them.
 constexpr double kBarycentricMargin = 0.05;  // K > 0: Dupin centre this far inside (barycentric)
 constexpr double kSectorMargin = 0.05;       // K < 0: II(e, e) / (kmax |e|^2) this far on each side of 0
 
-// The star triangle (0, a, b) at g: whether it satisfies Prop. 4 / 5 (exactly as starIsValid judges it), and
-// how far it is from satisfying it with the margins (0 when it does).
+// The star triangle (0, a, b) at g: whether it satisfies Prop. 4 / 5 (starValidity), and how far it is from
+// satisfying it with the margins (0 when it does).
 struct TriangleState {
   bool valid = false;
   double violation = 3.0;
 };
 
 TriangleState triangleState(const LocalGeometry& g, const Vec2& a, const Vec2& b) {
+  const StarValidity s = starValidity(g, {Vec2(0, 0), a, b});
   TriangleState r;
-  const double area2 = cross2(a, b);
-  if (!(std::abs(area2) > 1e-12 * a.norm() * b.norm())) return r;
-  const double K = g.k1 * g.k2;
-  if (K > 0) {
-    const std::optional<Vec2> m = dupinCenter(g, Vec2::Zero(), a, b);
-    if (!m) return r;
-    const double b0 = cross2(a - *m, b - *m) / area2;
-    const double b1 = cross2(b - *m, -*m) / area2;
-    const double b2 = cross2(-*m, a - *m) / area2;
-    r.valid = b0 > 0 && b1 > 0 && b2 > 0;
+  if (!s.judged) return r;
+  r.valid = s.valid;
+  if (g.k1 * g.k2 > 0) {
     double v = 0;
-    for (double bi : {b0, b1, b2}) v += std::max(0.0, kBarycentricMargin - bi);
+    for (double bi : s.measures) v += std::max(0.0, kBarycentricMargin - bi);
     r.violation = std::min(v, 3.0);
-    return r;
+  } else {
+    const double pos = *std::max_element(s.measures.begin(), s.measures.end());
+    const double neg = -*std::min_element(s.measures.begin(), s.measures.end());
+    r.violation = std::max(0.0, kSectorMargin - pos) + std::max(0.0, kSectorMargin - neg);
   }
-  if (!(K < 0)) return r;
-  const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
-  double pos = -std::numeric_limits<double>::infinity(), neg = pos;
-  bool zero = false;
-  for (const Vec2& e : {a, Vec2(b - a), Vec2(-b)}) {
-    const double q = secondFundamentalForm(g, e, e);
-    zero = zero || q == 0;
-    pos = std::max(pos, q / (kmax * e.squaredNorm()));
-    neg = std::max(neg, -q / (kmax * e.squaredNorm()));
-  }
-  r.valid = pos > 0 && neg > 0 && !zero;
-  r.violation = std::max(0.0, kSectorMargin - pos) + std::max(0.0, kSectorMargin - neg);
   return r;
 }
 
@@ -68,21 +51,7 @@ class Repair {
     parametric_ = dynamic_cast<const ParametricSurface*>(&surface);
     if (!parametric_ || static_cast<int>(t.uv.size()) != T_.V.rows()) parametric_ = nullptr;
     const int nv = static_cast<int>(T_.V.rows());
-    double total = 0;
-    long edges = 0;
-    for (int f = 0; f < T_.F.rows(); ++f)
-      for (int k = 0; k < 3; ++k) total += (T_.V.row(T_.F(f, k)) - T_.V.row(T_.F(f, (k + 1) % 3))).norm(), ++edges;
-    const double meanEdge = edges ? total / edges : 0.0;
-    // The same stars checkTriangulation judges: interior, and not at or across a parabolic curve.
-    checkable_.assign(nv, 0);
-    for (int v = 0; v < nv; ++v) {
-      if (rings_.triangles[v].empty() || !rings_.closed[v]) continue;
-      const PointType type = classify(geo_[v], 1e-6, meanEdge);
-      bool across = type == PointType::Parabolic || type == PointType::Planar;
-      for (int f : rings_.triangles[v])
-        for (int k = 0; k < 3 && !across; ++k) across = classify(geo_[T_.F(f, k)], 1e-6, meanEdge) != type;
-      checkable_[v] = !across;
-    }
+    checkable_ = judgedStars(T_, rings_, geo_, T_.meanEdgeLength());  // the stars checkTriangulation judges
     neighbours_.resize(nv);
     for (int v = 0; v < nv; ++v) {
       for (int f : rings_.triangles[v])
@@ -278,7 +247,13 @@ class Repair {
 RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps) {
   if (triangulation.mesh.F.rows() == 0 || maxSweeps <= 0) return {};
   Repair repair(triangulation, surface);
-  return repair.run(maxSweeps);
+  const RepairResult r = repair.run(maxSweeps);
+  if (r.invalidBefore > 0)
+    triangulation.notes.push_back("repaired " + std::to_string(r.invalidBefore - r.invalidAfter) + " of " +
+                                  std::to_string(r.invalidBefore) + " invalid stars by moving " +
+                                  std::to_string(r.moved) + " vertices within the surface (" +
+                                  std::to_string(r.sweeps) + " sweeps)");
+  return r;
 }
 
 }  // namespace phex

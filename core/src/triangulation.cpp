@@ -54,13 +54,7 @@ void zipRows(const std::vector<int>& a, const std::vector<double>& ua, const std
 }  // namespace
 
 double surfaceArea(const Surface& surface) {
-  if (const auto* m = dynamic_cast<const MeshSurface*>(&surface)) {
-    double area = 0;
-    const TriMesh& T = m->mesh();
-    for (int f = 0; f < T.F.rows(); ++f)
-      area += 0.5 * (T.V.row(T.F(f, 1)) - T.V.row(T.F(f, 0))).cross(T.V.row(T.F(f, 2)) - T.V.row(T.F(f, 0))).norm();
-    return area;
-  }
+  if (const auto* m = dynamic_cast<const MeshSurface*>(&surface)) return m->mesh().area();
   const auto& p = dynamic_cast<const ParametricSurface&>(surface);
   const auto d = p.domain();
   constexpr int n = 64;  // midpoint rule on the parameter domain
@@ -189,6 +183,22 @@ std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface&
   return geo;
 }
 
+std::vector<char> judgedStars(const TriMesh& T, const VertexRings& rings, const std::vector<LocalGeometry>& geo,
+                              double edgeMean) {
+  std::vector<char> judged(T.V.rows(), 0);
+  for (int v = 0; v < static_cast<int>(T.V.rows()); ++v) {
+    if (rings.triangles[v].empty() || !rings.closed[v]) continue;
+    const PointType type = classify(geo[v], 1e-6, edgeMean);
+    // A star across a parabolic curve (a neighbour where K has the other sign or vanishes: §6 step 1) has no
+    // single indicatrix to be judged by: the curvature its edges span changes in kind.
+    bool across = type == PointType::Parabolic || type == PointType::Planar;
+    for (int f : rings.triangles[v])
+      for (int k = 0; k < 3 && !across; ++k) across = classify(geo[T.F(f, k)], 1e-6, edgeMean) != type;
+    judged[v] = !across;
+  }
+  return judged;
+}
+
 TriangulationCheck checkTriangulation(const Triangulation& t, const Surface& surface) {
   TriangulationCheck c;
   const TriMesh& T = t.mesh;
@@ -208,13 +218,11 @@ TriangulationCheck checkTriangulation(const Triangulation& t, const Surface& sur
   c.edgeMean = edges ? c.edgeMean / edges : 0.0;
   if (!edges) c.edgeMin = 0;
   if (dynamic_cast<const MeshSurface*>(&surface) || dynamic_cast<const ParametricSurface*>(&surface)) {
-    double area = 0;
-    for (int f = 0; f < T.F.rows(); ++f)
-      area += 0.5 * (T.V.row(T.F(f, 1)) - T.V.row(T.F(f, 0))).cross(T.V.row(T.F(f, 2)) - T.V.row(T.F(f, 0))).norm();
     const double total = surfaceArea(surface);
-    if (total > 0) c.coverage = area / total;
+    if (total > 0) c.coverage = T.area() / total;
   }
   int regular = 0;
+  const std::vector<char> judged = judgedStars(T, rings, geo, c.edgeMean);
   for (int v = 0; v < c.vertices; ++v) {
     if (rings.triangles[v].empty()) continue;
     if (!rings.closed[v]) {
@@ -228,16 +236,7 @@ TriangulationCheck checkTriangulation(const Triangulation& t, const Surface& sur
     // Propositions 4 and 5, with each triangle of the real star taken as the fundamental triangle of a
     // symmetric star in the vertex's tangent plane (vertical projection, §4.1).
     const LocalGeometry& g = geo[v];
-    const PointType type = classify(g, 1e-6, c.edgeMean);
-    // A star across a parabolic curve (a neighbour where K has the other sign or vanishes: §6 step 1) has no
-    // single indicatrix to be judged by: the curvature its edges span changes in kind.
-    bool across = type == PointType::Parabolic || type == PointType::Planar;
-    for (int f : rings.triangles[v])
-      for (int k = 0; k < 3 && !across; ++k) {
-        const PointType other = classify(geo[T.F(f, k)], 1e-6, c.edgeMean);
-        across = other != type;
-      }
-    if (across) {
+    if (!judged[v]) {
       c.parabolicStars.push_back(v);
       continue;
     }

@@ -14,6 +14,10 @@ using Triangles = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;     //
 struct TriMesh {
   Points V;
   Triangles F;
+  // Mean edge length over all triangles (each shared edge counted from both sides).
+  double meanEdgeLength() const;
+  // Sum of the triangles' areas.
+  double area() const;
 };
 
 // A polygon mesh: face f has the vertex ids indices[offsets[f] .. offsets[f+1]), CCW seen from the normal side.

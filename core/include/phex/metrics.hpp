@@ -20,6 +20,8 @@ double facePlanarity(const PolyMesh& mesh, int face);
 bool polygonSelfIntersects(const std::vector<Vec2>& polygon);
 // True when two non-adjacent edges of the face cross (seen in its least-squares plane) or an edge is degenerate.
 bool faceSelfIntersects(const PolyMesh& mesh, int face);
+// The same, with the corners projected onto a plane of the given normal (e.g. the face's current plane).
+bool faceSelfIntersects(const PolyMesh& mesh, int face, const Vec3& normal);
 
 // The 4-point planarity measure of libhedra, for comparison: for every run of four consecutive corners, the
 // distance between the lines of its two diagonals over their mean length; the face's value is the root mean

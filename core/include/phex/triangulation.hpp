@@ -9,6 +9,8 @@
 
 namespace phex {
 
+struct VertexRings;
+
 struct Triangulation {
   TriMesh mesh;
   std::vector<Vec2> uv;  // #V parameters when laid in the parameter domain of a ParametricSurface; else empty
@@ -57,11 +59,17 @@ struct TriangulationCheck {
 };
 TriangulationCheck checkTriangulation(const Triangulation& triangulation, const Surface& surface);
 
+// Per vertex, 1 where checkTriangulation judges its star by Propositions 4/5: an interior vertex, neither at
+// nor across a parabolic curve (classify with tolerance 1e-6 at `edgeMean` for it and its neighbours).
+std::vector<char> judgedStars(const TriMesh& mesh, const VertexRings& rings, const std::vector<LocalGeometry>& geo,
+                              double edgeMean);
+
 // Local repair of the stars checkTriangulation finds invalid: each centre of an invalid star, and each of its
 // neighbours, is moved within the surface (at most 0.4 of its ring's mean edge from where it was laid, no
 // triangle turned over) to the candidate position — towards its ring's centroid, or a small step in its
 // tangent plane — that leaves fewer invalid stars around it, or the same number further from the edge of
 // validity. Sweeps until no star is invalid, nothing improves, or `maxSweeps`. Connectivity is unchanged.
+// When there were invalid stars, a note says how many were repaired.
 struct RepairResult {
   int invalidBefore = 0, invalidAfter = 0;  // invalid stars (as checkTriangulation counts them)
   int moved = 0;                            // vertices moved
