@@ -110,6 +110,12 @@ phex::PipelineParams paramsFromJs(const val& o) {
       throw phex::Error(phex::ErrorCode::InvalidParameter, "folds must be 'prevent' or 'allow' (got '" + folds + "')");
     p.preventFolds = folds == "prevent";
   }
+  if (has(o, "surfaceFit")) {
+    const std::string fit = text(o, "surfaceFit");
+    if (fit != "on" && fit != "off")
+      throw phex::Error(phex::ErrorCode::InvalidParameter, "surfaceFit must be 'on' or 'off' (got '" + fit + "')");
+    p.fitSurface = fit == "on";
+  }
   return p;
 }
 
@@ -194,6 +200,9 @@ val resultToJs(const phex::PipelineResult& r) {
   solve.set("initialPlanarityMax", r.solve.initialPlanarityMax);
   solve.set("planarityMax", r.solve.planarityMax);
   solve.set("displacementMax", r.solve.displacementMax);
+  solve.set("surfaceFitted", r.solve.surfaceFitted);
+  solve.set("surfaceDistanceBefore", r.solve.surfaceDistanceBefore);
+  solve.set("surfaceDistanceAfter", r.solve.surfaceDistanceAfter);
   val log = val::array();
   for (const phex::IterationLog& it : r.solve.log) {
     val e = val::object();

@@ -331,6 +331,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   po.tolerance = params.tolerance;
   po.maxIterations = params.maxIterations;
   po.preventFolds = params.preventFolds;
+  po.fitSurface = params.fitSurface;
   po.surface = &surface;
   r.solve = planarize(r.hex, po, progress, cancel);
   clock.done("planarize");

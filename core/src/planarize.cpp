@@ -6,6 +6,9 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <limits>
+
+#include <Eigen/IterativeLinearSolvers>
 
 #include "phex/error.hpp"
 #include "phex/metrics.hpp"
@@ -519,10 +522,209 @@ PlanarizeReport solvePlanarity(PolyMesh& mesh, const PlanarizeOptions& options, 
 
 }  // namespace
 
+namespace {
+
+// Brings a planar mesh closer to the surface without touching planarity: every face plane is shifted
+// along its own normal by δ_f and every vertex follows to the intersection of its faces' shifted planes.
+// The normals do not change, so a vertex's move is linear in the shifts of its faces: x_v = x0_v + G_v δ,
+// with G_v = N_vᵀ (N_v N_vᵀ)⁻¹ for the unit normals N_v of its (at most three) faces — exactly on the
+// three planes at an interior node (every interior node of a P-Hex mesh has valence 3), on the line of
+// the two planes at a boundary node, on the one plane at a corner. Where the planes (nearly) share a
+// line — next to a parabolic curve — or a vertex has more than three faces, its faces keep their planes.
+// The shifts minimize, in the least-squares sense, the vertices' distances to the surface (linearized
+// at their closest points) plus a small price on tangential drift and on the shifts themselves: one
+// unknown per face, solved by conjugate gradients; two Gauss-Newton rounds (closest points recomputed,
+// the second reweighted towards the largest distances). Kept only if the largest distance drops and
+// no face becomes self-intersecting.
+struct SurfaceFit {
+  bool applied = false;
+  double before = 0.0, after = 0.0;  // max vertex distance to the surface, absolute
+};
+
+SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const CancelFlag* cancel) {
+  SurfaceFit fit;
+  const int nv = static_cast<int>(mesh.V.rows()), nf = mesh.faceCount();
+  const double h = mesh.meanEdgeLength();
+  if (nv == 0 || nf == 0 || !(h > 0)) return fit;
+  std::vector<Vec3> normal(nf);
+  for (int f = 0; f < nf; ++f) normal[f] = leastSquaresPlane(mesh, f).normal;
+  std::vector<int> start(nv + 1, 0), faces;
+  for (int f = 0; f < nf; ++f)
+    for (int i = 0; i < mesh.faceSize(f); ++i) ++start[mesh.face(f)[i] + 1];
+  for (int v = 0; v < nv; ++v) start[v + 1] += start[v];
+  faces.resize(start[nv]);
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (int f = 0; f < nf; ++f)
+      for (int i = 0; i < mesh.faceSize(f); ++i) faces[fill[mesh.face(f)[i]]++] = f;
+  }
+  // G_v, column k for the k-th face at v (3 x #faces(v), stored column after column).
+  std::vector<Vec3> G(faces.size(), Vec3::Zero());
+  std::vector<char> frozen(nf, 0);
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  constexpr double kLeverageSpread = 30.0;  // over the median vertex move per unit of plane shift
+  std::vector<double> leverage(nv, 0.0);
+  using Normals = Eigen::Matrix<double, Eigen::Dynamic, 3, 0, 3, 3>;
+  using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 3>;
+  for (int v = 0; v < nv; ++v) {
+    const int k = start[v + 1] - start[v];
+    // Planes through (nearly) one line — next to a parabolic curve — meet far away or nowhere: a shift
+    // would send the vertex along their common direction, or off one of them; and more than three
+    // planes have no common point to follow. Such a vertex stays, and so do the planes of its faces.
+    bool stays = k > 3;
+    if (k >= 1 && k <= 3) {
+      Normals N(k, 3);
+      for (int j = 0; j < k; ++j) N.row(j) = normal[faces[start[v] + j]].transpose();
+      const Square gram = N * N.transpose();
+      const Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, 3> g = N.transpose() * gram.inverse();
+      for (int j = 0; j < k; ++j) G[start[v] + j] = g.col(j);
+      stays = !g.allFinite() || (N * g - Square::Identity(k, k)).norm() > 1e-9;
+      leverage[v] = stays ? kInfinity : g.norm();
+    }
+    if (stays)
+      for (int j = 0; j < k; ++j) frozen[faces[start[v] + j]] = 1;
+  }
+  // Nearly so: a vertex whose move per unit of shift is far above the mesh's typical one.
+  {
+    std::vector<double> finite;
+    for (double l : leverage)
+      if (l < kInfinity) finite.push_back(l);
+    if (!finite.empty()) {
+      std::nth_element(finite.begin(), finite.begin() + finite.size() / 2, finite.end());
+      const double limit = kLeverageSpread * finite[finite.size() / 2];
+      for (int v = 0; v < nv; ++v)
+        if (leverage[v] > limit)
+          for (int k = start[v]; k < start[v + 1]; ++k) frozen[faces[k]] = 1;
+    }
+  }
+  for (int v = 0; v < nv; ++v)
+    for (int k = start[v]; k < start[v + 1]; ++k)
+      if (frozen[faces[k]]) G[k].setZero();
+  const Points x0 = mesh.V;
+  auto place = [&](const Eigen::VectorXd& delta) {  // delta in units of h
+    for (int v = 0; v < nv; ++v) {
+      Vec3 dx = Vec3::Zero();
+      for (int k = start[v]; k < start[v + 1]; ++k) dx += G[k] * (delta[faces[k]] * h);
+      mesh.V.row(v) = x0.row(v) + dx.transpose();
+    }
+  };
+  std::vector<LocalGeometry> feet(nv);
+  auto footPoints = [&]() {  // closest points of the current vertices; returns the largest distance
+    double worst = 0;
+    for (int v = 0; v < nv; ++v) {
+      feet[v] = surface.closestPoint(mesh.vertex(v));
+      worst = std::max(worst, (feet[v].point - mesh.vertex(v)).norm());
+    }
+    return worst;
+  };
+  auto selfIntersecting = [&]() {
+    int count = 0;
+    for (int f = 0; f < nf; ++f) count += faceSelfIntersects(mesh, f, normal[f]);
+    return count;
+  };
+  fit.before = footPoints();
+  const int foldedBefore = selfIntersecting();
+  const double tangential = 0.1, shift = 1e-3;  // weights relative to the normal distance
+  const double wt = std::sqrt(tangential), ws = std::sqrt(shift);
+  Eigen::VectorXd delta = Eigen::VectorXd::Zero(nf);
+  std::vector<Eigen::Triplet<double>> triplets;
+  double distance = fit.before;
+  constexpr int kRounds = 2;
+  // Round 1 minimizes the sum of squared distances; the next ones reweight each vertex by its squared
+  // distance over the mean square (at least 1), leaning towards the largest distance, which is what
+  // the report gives. The best placement by largest distance is kept.
+  std::vector<double> weight(nv, 1.0);
+  Eigen::VectorXd best = delta;
+  double bestDistance = fit.before;
+  for (int round = 0; round < kRounds; ++round) {
+    checkCancel(cancel);
+    triplets.clear();
+    Eigen::VectorXd r(3 * nv + nf);
+    for (int v = 0; v < nv; ++v) {
+      const Vec3 x = mesh.vertex(v);
+      // The distance's own gradient: along the surface normal where the closest point is inside the
+      // surface, towards the boundary curve where the vertex lies beyond it (boundary panels).
+      const Vec3 away = x - feet[v].point;
+      const double gap = away.norm();
+      const Vec3 n = gap > 1e-12 * h && std::abs(feet[v].normal.dot(away)) < 0.9 * gap ? Vec3(away / gap) : feet[v].normal;
+      const Vec3 t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+      const Vec3 drift = x - x0.row(v).transpose();
+      const double wv = std::sqrt(weight[v]);
+      r[3 * v] = wv * n.dot(away) / h;
+      r[3 * v + 1] = wt * t1.dot(drift) / h;
+      r[3 * v + 2] = wt * t2.dot(drift) / h;
+      for (int k = start[v]; k < start[v + 1]; ++k) {
+        triplets.emplace_back(3 * v, faces[k], wv * n.dot(G[k]));
+        triplets.emplace_back(3 * v + 1, faces[k], wt * t1.dot(G[k]));
+        triplets.emplace_back(3 * v + 2, faces[k], wt * t2.dot(G[k]));
+      }
+    }
+    for (int f = 0; f < nf; ++f) {
+      triplets.emplace_back(3 * nv + f, f, frozen[f] ? 1.0 : ws);
+      r[3 * nv + f] = ws * delta[f];
+    }
+    Eigen::SparseMatrix<double> J(3 * nv + nf, nf);
+    J.setFromTriplets(triplets.begin(), triplets.end());
+    const Eigen::SparseMatrix<double> JtJ = J.transpose() * J;
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg(JtJ);
+    cg.setTolerance(1e-4);
+    cg.setMaxIterations(100);
+    Eigen::VectorXd step = cg.solve(-(J.transpose() * r));
+    if (!step.allFinite()) break;
+    for (int f = 0; f < nf; ++f)
+      if (frozen[f]) step[f] = 0;
+    delta += step;
+    place(delta);
+    distance = footPoints();
+    if (distance < bestDistance) best = delta, bestDistance = distance;
+    double meanSquare = 0;
+    for (int v = 0; v < nv; ++v) meanSquare += (feet[v].point - mesh.vertex(v)).squaredNorm() / nv;
+    for (int v = 0; v < nv; ++v)
+      weight[v] = meanSquare > 0 ? std::clamp((feet[v].point - mesh.vertex(v)).squaredNorm() / meanSquare, 1.0, 1e4) : 1.0;
+  }
+  place(best);
+  distance = bestDistance;
+  if (distance < fit.before && selfIntersecting() <= foldedBefore) {
+    fit.applied = true;
+    fit.after = distance;
+    return fit;
+  }
+  mesh.V = x0;
+  fit.after = fit.before;
+  return fit;
+}
+
+}  // namespace
+
 PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const ProgressFn& progress,
                           const CancelFlag* cancel) {
   const Points initial = mesh.V;
   PlanarizeReport report = solvePlanarity(mesh, options, progress, cancel);
+  if (options.fitSurface && options.surface && report.converged) {
+    if (progress) progress({"planarize", 1.0, "shifting the face planes towards the surface"});
+    const Points planar = mesh.V;
+    const SurfaceFit fit = fitPlanesToSurface(mesh, *options.surface, cancel);
+    const double diagonal = options.surface->bounds().diagonal().norm();
+    if (fit.applied) {
+      report.planarityMax = maxPlanarity(mesh);
+      if (report.planarityMax > options.tolerance) {  // round-off or a damped vertex: settle it
+        PlanarizeOptions settle = options;
+        settle.lambda = 0;
+        settle.mu = 0;
+        settle.maxIterations = 10;
+        PlanarizeReport again;
+        again.initialPlanarityMax = again.planarityMax = report.planarityMax;
+        again = planarizeLocalGlobal(mesh, settle, {}, cancel, again);
+        report.planarityMax = again.planarityMax;
+      }
+      if (report.planarityMax > options.tolerance) mesh.V = planar, report.planarityMax = maxPlanarity(mesh);
+      else report.surfaceFitted = true;
+    }
+    if (diagonal > 0) {
+      report.surfaceDistanceBefore = fit.before / diagonal;
+      report.surfaceDistanceAfter = (report.surfaceFitted ? fit.after : fit.before) / diagonal;
+    }
+  }
   const double h = mesh.meanEdgeLength();
   if (h > 0 && mesh.V.rows() > 0) report.displacementMax = (mesh.V - initial).rowwise().norm().maxCoeff() / h;
   return report;

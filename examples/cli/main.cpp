@@ -60,6 +60,8 @@ Options of `phex run`:
                             or the paper's tetrahedron volumes by Gauss-Newton (Ceres, reference)
   --folds prevent|allow     the local solver keeps simple faces simple (default; where only folding
                             reaches planarity it stops short and says so) or lets them fold
+  --surface-fit on|off      once planar, shift every face plane along its normal (the faces stay
+                            exactly planar) to bring the vertices closer to the surface (default on)
   --out FILE                write the P-Hex mesh (for triangulate: the triangulation, OBJ)
   --format obj|ply|json     output format (default from the extension, else obj); json carries
                             the per-face metrics
@@ -152,7 +154,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                  {"field", p.field}, {"lowerBound", p.lowerBound}, {"surfaceParams", p.surfaceParams}, {"faces", p.faces}, {"cell", p.cell},
                  {"tolerance", p.tolerance}, {"lambda", p.lambda}, {"mu", p.mu}, {"maxIterations", p.maxIterations},
                  {"duality", phex::dualityName(p.duality)}, {"solver", phex::methodName(p.solver)},
-                 {"folds", p.preventFolds ? "prevent" : "allow"}};
+                 {"folds", p.preventFolds ? "prevent" : "allow"}, {"surfaceFit", p.fitSurface ? "on" : "off"}};
   if (p.start) params["start"] = {p.start->x(), p.start->y(), p.start->z()};
   if (p.direction) params["direction"] = {p.direction->x(), p.direction->y(), p.direction->z()};
   return {{"phex", "0.1.0"},
@@ -178,6 +180,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"dualFallbacks", r.dual.fallbackCount},
           {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
                       {"log", log}}},
+          {"surfaceFit", {{"applied", r.solve.surfaceFitted}, {"distanceBefore", r.solve.surfaceDistanceBefore},
+                          {"distanceAfter", r.solve.surfaceDistanceAfter}}},
           {"milliseconds", timings},
           {"peakMemoryMB", peakMemoryMB()}};
 }
@@ -246,6 +250,11 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
       const std::string v = value();
       if (v != "prevent" && v != "allow") throw phex::Error(phex::ErrorCode::InvalidParameter, "--folds must be prevent or allow (got '" + v + "')");
       p.preventFolds = v == "prevent";
+    }
+    else if (a == "--surface-fit") {
+      const std::string v = value();
+      if (v != "on" && v != "off") throw phex::Error(phex::ErrorCode::InvalidParameter, "--surface-fit must be on or off (got '" + v + "')");
+      p.fitSurface = v == "on";
     }
     else if (a == "--out") out = value();
     else if (a == "--triangulation") tri = value();

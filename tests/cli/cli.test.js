@@ -53,6 +53,7 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--out', join(dir, 'no/such/dir/hex.obj')], /cannot open .*no\/such\/dir/],
     [['run', '--solver', 'magic'], /solver must be/],
     [['run', '--folds', 'maybe'], /--folds must be prevent or allow/],
+    [['run', '--surface-fit', 'maybe'], /--surface-fit must be on or off/],
     [['run', '--start', '1,2'], /--start expects X,Y,Z/],
     [['run', '--direction', '0,0,0'], /direction must be a non-zero vector/],
     [['run', '--param', 'R'], /NAME=VALUE/],

@@ -70,3 +70,54 @@ TEST_CASE("planarize: the local solver keeps simple faces simple unless folds ar
   CHECK(rg.converged == (rg.planarityMax <= o.tolerance));
   CHECK(rg.planarityMax < rg.initialPlanarityMax);
 }
+
+TEST_CASE("planarize: shifting the face planes brings the nodes to the surface and keeps every face planar") {
+  SECTION("a P-Hex mesh blown up by 2 % comes back onto its sphere") {
+    PipelineParams p;
+    p.surface = "sphere";
+    p.faces = 600;
+    p.fitSurface = false;
+    PipelineResult r = runPipeline(p);
+    REQUIRE(r.solve.converged);
+    PolyMesh blown = r.hex;
+    blown.V *= 1.02;  // a scaled planar mesh is planar: only the distance is off
+    const double before = measure(blown, *r.surface).surfaceDistanceMax;
+    PlanarizeOptions o;
+    o.surface = r.surface.get();
+    const PlanarizeReport fit = planarize(blown, o);
+    const MeshMetrics m = measure(blown, *r.surface);
+    CHECK(fit.iterations == 0);  // already planar: only the shift ran
+    CHECK(fit.surfaceFitted);
+    CHECK(m.planarityMax <= 1e-9);
+    CHECK(m.selfIntersectingCount == 0);
+    CHECK(m.surfaceDistanceMax < 0.2 * before);
+    CHECK(fit.surfaceDistanceAfter == Approx(m.surfaceDistanceMax).margin(1e-12));
+    CHECK(fit.surfaceDistanceBefore == Approx(before).margin(1e-12));
+  }
+  SECTION("on the pipeline's results the largest distance drops, planarity and simplicity stay") {
+    for (const char* name : {"sphere", "torus", "cyclide"}) {
+      CAPTURE(name);
+      PipelineParams p;
+      p.surface = name;
+      p.faces = 1000;
+      const PipelineResult fitted = runPipeline(p);
+      p.fitSurface = false;
+      const PipelineResult plain = runPipeline(p);
+      CHECK(fitted.solve.surfaceFitted);
+      CHECK_FALSE(plain.solve.surfaceFitted);
+      CHECK(fitted.metrics.planarityMax <= 1e-9);
+      CHECK(fitted.metrics.selfIntersectingCount == 0);
+      CHECK(fitted.metrics.surfaceDistanceMax < 0.6 * plain.metrics.surfaceDistanceMax);
+      CHECK(fitted.metrics.surfaceDistanceMean < 0.6 * plain.metrics.surfaceDistanceMean);
+      CHECK(fitted.metrics.surfaceDistanceMax <= 0.002);
+    }
+  }
+  SECTION("a plane has nothing to gain: the mesh is left as it was") {
+    PipelineParams p;
+    p.surface = "plane";
+    p.faces = 300;
+    const PipelineResult r = runPipeline(p);
+    CHECK_FALSE(r.solve.surfaceFitted);
+    CHECK(r.metrics.surfaceDistanceMax < 1e-12);
+  }
+}

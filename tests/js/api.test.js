@@ -257,6 +257,20 @@ test("folds: 'prevent' keeps faces simple, 'allow' reaches planarity by folding,
   assert.match(error.message, /folds/);
 });
 
+test("surfaceFit: 'on' shifts the planes closer to the surface, faces stay planar; 'off' does not; anything else is named", async () => {
+  const fitted = await phex.run({ surface: 'cyclide', faces: 1000 });
+  const plain = await phex.run({ surface: 'cyclide', faces: 1000, surfaceFit: 'off' });
+  assert.ok(fitted.solve.surfaceFitted);
+  assert.ok(!plain.solve.surfaceFitted);
+  assert.ok(fitted.metrics.surfaceDistanceMax < 0.6 * plain.metrics.surfaceDistanceMax);
+  assert.ok(fitted.metrics.planarityMax <= 1e-9);
+  assert.equal(fitted.metrics.selfIntersectingCount, 0);
+  assert.ok(Math.abs(fitted.solve.surfaceDistanceAfter - fitted.metrics.surfaceDistanceMax) < 1e-12);
+  const error = await rejection({ surface: 'torus', surfaceFit: 'maybe' });
+  assert.equal(error.code, 'invalid_parameter');
+  assert.match(error.message, /surfaceFit/);
+});
+
 test('start and direction set where and which way the base curve runs; bad ones are named', async () => {
   const outer = await phex.run({ surface: 'torus', method: 'prespecified', faces: 800, start: [1.4, 0, 0], direction: [0, 1, 0] });
   assert.match(outer.triangulation.notes[0], /L0 closed/);

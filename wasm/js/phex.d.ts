@@ -155,6 +155,11 @@ export interface SolveReport {
   planarityMax: number;
   /** Largest vertex move from the initial mesh, divided by the mean edge length. */
   displacementMax: number;
+  /** Whether the face planes were shifted towards the surface after planarity (`surfaceFit: 'on'`). */
+  surfaceFitted: boolean;
+  /** Largest node distance to the surface over its bounding-box diagonal, before and after that shift. */
+  surfaceDistanceBefore: number;
+  surfaceDistanceAfter: number;
   log: IterationLog[];
 }
 
@@ -249,6 +254,12 @@ export interface RunParams {
   direction?: [number, number, number] | null;
   folds?: 'prevent' | 'allow';
   /**
+   * 'on' (default): once planar, every face plane is shifted along its normal (each node following to the
+   * intersection of its planes, so faces stay exactly planar) to bring the nodes closer to the surface;
+   * kept only where the largest distance drops without folding a face (`solve.surfaceFitted`). 'off': not.
+   */
+  surfaceFit?: 'on' | 'off';
+  /**
    * Triangulation method: 'auto' (default: the surface's recommended method, `SurfaceSpec.method`;
    * 'prespecified' for uploaded meshes), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
    * conjugation along `field` (Method 2), 'subdivision' (Loop subdivision of a convex control mesh, §7:
@@ -263,7 +274,7 @@ export interface RunParams {
 
 /** A run parameter as listed in {@link PARAMETERS}. */
 export interface ParameterSpec {
-  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound';
+  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound';
   /** 'point': an [x, y, z] array, or null for the default. */
   type: 'integer' | 'number' | 'enum' | 'field' | 'point';
   default: number | string | null;

@@ -60,6 +60,7 @@ struct PipelineParams {
   Duality duality = Duality::Dupin;  // initializer of the optimization: Dupin (§6) or tangent (§4.1)
   PlanarizeMethod solver = PlanarizeMethod::LocalGlobal;  // planarity solver (see planarize.hpp)
   bool preventFolds = true;        // the local solver keeps simple faces simple (PlanarizeOptions::preventFolds)
+  bool fitSurface = true;          // once planar, shift the face planes towards the surface (PlanarizeOptions::fitSurface)
 };
 
 // "dupin" / "tangent" <-> Duality; parseDuality throws Error(InvalidParameter) for other names.

@@ -40,6 +40,10 @@ struct PlanarizeOptions {
   // tolerance, and the report says so; false lets such faces fold to reach planarity. The Ceres solvers
   // do not guard.
   bool preventFolds = true;
+  // Once planar, shift every face plane along its normal (each vertex following to the intersection of
+  // its faces' planes, so the faces stay exactly planar) to bring the vertices closer to the surface
+  // (needs `surface`). Kept only where it lowers the largest distance without folding a face.
+  bool fitSurface = true;
 };
 
 struct IterationLog {
@@ -58,6 +62,11 @@ struct PlanarizeReport {
   double initialPlanarityMax = 0.0;
   double planarityMax = 0.0;
   double displacementMax = 0.0;  // largest vertex move from the initial mesh, over the mean edge length
+  // The plane shift towards the surface (PlanarizeOptions::fitSurface): whether it was kept, and the
+  // largest vertex distance to the surface before and after it, over the surface's bounding-box diagonal.
+  bool surfaceFitted = false;
+  double surfaceDistanceBefore = 0.0;
+  double surfaceDistanceAfter = 0.0;
   std::vector<IterationLog> log;
 };
 
