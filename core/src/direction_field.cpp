@@ -219,95 +219,106 @@ double polylineLength(const std::vector<SurfacePoint>& polyline, bool closed) {
   return length;
 }
 
+FlowTracer::FlowTracer(const DirectionField& field, Family family, const SurfacePoint& start, const Vec3& initial,
+                       double maxLength, bool detectClosure)
+    : field_(&field), family_(family), start_(start), current_(start), maxLength_(maxLength),
+      detectClosure_(detectClosure) {
+  line_.points.push_back(start);
+  const std::optional<Vec3> k1 = field.direction(start, family, &initial);
+  if (!k1) {
+    line_.end = FlowLine::End::Singularity;
+    finished_ = true;
+    return;
+  }
+  startDirection_ = k1_ = *k1;
+  h_ = 0.25 * field.walker().cell();
+}
+
+bool FlowTracer::advance(double upTo) {
+  while (!finished_ && line_.length < upTo) attempt();
+  return finished_;
+}
+
+void FlowTracer::attempt() {
+  const SurfaceWalker& walker = field_->walker();
+  const double cell = walker.cell(), tolerance = 1e-4 * cell, maxStep = 0.5 * cell, minStep = 1e-3 * cell;
+  auto end = [&](FlowLine::End how) {
+    line_.end = how;
+    finished_ = true;
+  };
+  if (!(line_.length < maxLength_)) return end(FlowLine::End::Length);
+  double& h = h_;
+  h = std::min(h, maxLength_ - line_.length);
+  if (h < 1e-9 * cell) return end(FlowLine::End::Length);
+  // Bogacki–Shampine RK 3(2) in space; each stage is evaluated at the projection of its point.
+  const Vec3 x = current_.point();
+  const SurfacePoint p2 = walker.project(x + 0.5 * h * k1_, current_);
+  const std::optional<Vec3> k2 = field_->direction(p2, family_, &k1_);
+  const std::optional<Vec3> k3 =
+      k2 ? field_->direction(walker.project(x + 0.75 * h * *k2, current_), family_, &*k2) : std::nullopt;
+  if (!k3) {
+    if (h > minStep) {
+      h *= 0.25;
+      return;
+    }
+    return end(FlowLine::End::Singularity);
+  }
+  const Vec3 next = x + h * (2.0 / 9 * k1_ + 1.0 / 3 * *k2 + 4.0 / 9 * *k3);
+  const SurfacePoint pn = walker.project(next, current_);
+  if (walker.isOutside(next, pn)) {
+    // Locate the boundary crossing by bisection on the step.
+    double inside = 0, outside = 1;
+    SurfacePoint last = current_;
+    for (int it = 0; it < 10; ++it) {
+      const double t = 0.5 * (inside + outside);
+      const Vec3 q = x + t * (next - x);
+      const SurfacePoint pq = walker.project(q, current_);
+      if (walker.isOutside(q, pq)) {
+        outside = t;
+      } else {
+        inside = t;
+        last = pq;
+      }
+    }
+    if (inside > 0) {
+      line_.length += (last.point() - x).norm();
+      line_.points.push_back(last);
+    }
+    return end(FlowLine::End::Boundary);
+  }
+  const std::optional<Vec3> k4 = field_->direction(pn, family_, &*k3);
+  const double error = h * (-5.0 / 72 * k1_ + 1.0 / 12 * *k2 + 1.0 / 9 * *k3 - 1.0 / 8 * k4.value_or(*k3)).norm();
+  if (error > tolerance && h > minStep) {
+    h *= std::max(0.2, 0.9 * std::cbrt(tolerance / error));
+    return;
+  }
+  const double segment = (pn.point() - x).norm();
+  if (segment < 0.25 * h) {
+    // The projection does not follow the step: the foot is held at a trimmed edge within the tolerance.
+    return end(FlowLine::End::Boundary);
+  }
+  if (detectClosure_ && line_.length + segment > 3 * cell) {
+    // Back at the start, heading the same way: a loop. Close it exactly at the start.
+    const Vec3 s = pn.point() - x;
+    const double t = std::clamp((start_.point() - x).dot(s) / std::max(s.squaredNorm(), 1e-300), 0.0, 1.0);
+    if ((x + t * s - start_.point()).norm() < 0.25 * cell && s.dot(startDirection_) > 0.5 * segment) {
+      line_.length += (start_.point() - x).norm();
+      return end(FlowLine::End::Closed);
+    }
+  }
+  line_.points.push_back(pn);
+  line_.length += segment;
+  current_ = pn;
+  if (!k4) return end(FlowLine::End::Singularity);
+  k1_ = *k4;
+  h = std::min(maxStep, h * std::min(4.0, 0.9 * std::cbrt(tolerance / std::max(error, 1e-300))));
+}
+
 FlowLine traceFlowLine(const DirectionField& field, Family family, const SurfacePoint& start, const Vec3& initial,
                        double maxLength, bool detectClosure) {
-  const SurfaceWalker& walker = field.walker();
-  const double cell = walker.cell(), tolerance = 1e-4 * cell, maxStep = 0.5 * cell, minStep = 1e-3 * cell;
-  FlowLine line;
-  line.points.push_back(start);
-  std::optional<Vec3> k1 = field.direction(start, family, &initial);
-  if (!k1) {
-    line.end = FlowLine::End::Singularity;
-    return line;
-  }
-  const Vec3 startDirection = *k1;
-  SurfacePoint current = start;
-  double h = 0.25 * cell;
-  while (line.length < maxLength) {
-    h = std::min(h, maxLength - line.length);
-    if (h < 1e-9 * cell) break;
-    // Bogacki–Shampine RK 3(2) in space; each stage is evaluated at the projection of its point.
-    const Vec3 x = current.point();
-    const SurfacePoint p2 = walker.project(x + 0.5 * h * *k1, current);
-    const std::optional<Vec3> k2 = field.direction(p2, family, &*k1);
-    const std::optional<Vec3> k3 =
-        k2 ? field.direction(walker.project(x + 0.75 * h * *k2, current), family, &*k2) : std::nullopt;
-    if (!k3) {
-      if (h > minStep) {
-        h *= 0.25;
-        continue;
-      }
-      line.end = FlowLine::End::Singularity;
-      return line;
-    }
-    const Vec3 next = x + h * (2.0 / 9 * *k1 + 1.0 / 3 * *k2 + 4.0 / 9 * *k3);
-    const SurfacePoint pn = walker.project(next, current);
-    if (walker.isOutside(next, pn)) {
-      // Locate the boundary crossing by bisection on the step.
-      double inside = 0, outside = 1;
-      SurfacePoint last = current;
-      for (int it = 0; it < 10; ++it) {
-        const double t = 0.5 * (inside + outside);
-        const Vec3 q = x + t * (next - x);
-        const SurfacePoint pq = walker.project(q, current);
-        if (walker.isOutside(q, pq)) {
-          outside = t;
-        } else {
-          inside = t;
-          last = pq;
-        }
-      }
-      if (inside > 0) {
-        line.length += (last.point() - x).norm();
-        line.points.push_back(last);
-      }
-      line.end = FlowLine::End::Boundary;
-      return line;
-    }
-    const std::optional<Vec3> k4 = field.direction(pn, family, &*k3);
-    const double error = h * (-5.0 / 72 * *k1 + 1.0 / 12 * *k2 + 1.0 / 9 * *k3 - 1.0 / 8 * k4.value_or(*k3)).norm();
-    if (error > tolerance && h > minStep) {
-      h *= std::max(0.2, 0.9 * std::cbrt(tolerance / error));
-      continue;
-    }
-    const double segment = (pn.point() - x).norm();
-    if (segment < 0.25 * h) {
-      // The projection does not follow the step: the foot is held at a trimmed edge within the tolerance.
-      line.end = FlowLine::End::Boundary;
-      return line;
-    }
-    if (detectClosure && line.length + segment > 3 * cell) {
-      // Back at the start, heading the same way: a loop. Close it exactly at the start.
-      const Vec3 s = pn.point() - x;
-      const double t = std::clamp((start.point() - x).dot(s) / std::max(s.squaredNorm(), 1e-300), 0.0, 1.0);
-      if ((x + t * s - start.point()).norm() < 0.25 * cell && s.dot(startDirection) > 0.5 * segment) {
-        line.length += (start.point() - x).norm();
-        line.end = FlowLine::End::Closed;
-        return line;
-      }
-    }
-    line.points.push_back(pn);
-    line.length += segment;
-    current = pn;
-    if (!k4) {
-      line.end = FlowLine::End::Singularity;
-      return line;
-    }
-    k1 = k4;
-    h = std::min(maxStep, h * std::min(4.0, 0.9 * std::cbrt(tolerance / std::max(error, 1e-300))));
-  }
-  line.end = FlowLine::End::Length;
-  return line;
+  FlowTracer tracer(field, family, start, initial, maxLength, detectClosure);
+  tracer.finish();
+  return tracer.release();
 }
 
 std::vector<SurfacePoint> sampleByArcLength(const SurfaceWalker& walker, const std::vector<SurfacePoint>& polyline,

@@ -1,6 +1,7 @@
 #include "phex/laying.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -24,6 +25,7 @@ constexpr double kResampleBelow = 0.55, kResampleAbove = 1.8;  // row spacing / 
 constexpr double kValidMargin = 1.1;  // Method 2 keeps the apexes this far above DE (in units of validStep)
 constexpr double kZipGap = 1.6;       // fronts facing each other closer than this many steps are zipped
 constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
+constexpr double kEllFirst = 1.5;     // ... at first only this many: further where no crossing is found
 
 const char* const kAsymptoticBase =
     "the base curve runs (almost) along an asymptotic direction, which is self-conjugate (§4.2, Prop. 5), so no "
@@ -126,22 +128,36 @@ SurfacePoint pointAtArc(const SurfaceWalker& walker, const std::vector<SurfacePo
 class PointGrid {
  public:
   explicit PointGrid(double spacing) : spacing_(spacing) {}
-  void insert(int id, const Vec3& p) { cells_[key(p, 0, 0, 0)].push_back(id); }
+  void insert(int id, const Vec3& p) { cells_[key(cellOf(p))].push_back(id); }
+  // Visits (at least) every point closer than radius to p: the points of the cells the box p +- radius meets.
   template <class Visit>
-  void forNear(const Vec3& p, Visit visit) const {
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = cells_.find(key(p, dx, dy, dz));
+  void forNear(const Vec3& p, double radius, Visit visit) const {
+    const double reach = radius * (1 + 1e-9) + 1e-9 * spacing_;  // beyond round-off in the cell indices
+    const Eigen::Array3d lo = (p.array() - reach) / spacing_, hi = (p.array() + reach) / spacing_;
+    std::int64_t a[3], b[3];
+    for (int c = 0; c < 3; ++c) {
+      // Within the 3 x 3 x 3 block around p's cell, all the collision test ever looked at (its radii are
+      // below the spacing, the cell, anyway).
+      const std::int64_t centre = static_cast<std::int64_t>(std::floor(p(c) / spacing_));
+      a[c] = std::max(centre - 1, static_cast<std::int64_t>(std::floor(lo(c))));
+      b[c] = std::min(centre + 1, static_cast<std::int64_t>(std::floor(hi(c))));
+    }
+    for (std::int64_t x = a[0]; x <= b[0]; ++x)
+      for (std::int64_t y = a[1]; y <= b[1]; ++y)
+        for (std::int64_t z = a[2]; z <= b[2]; ++z) {
+          const auto it = cells_.find(key({x, y, z}));
           if (it != cells_.end())
             for (int id : it->second) visit(id);
         }
   }
 
  private:
-  std::int64_t key(const Vec3& p, int dx, int dy, int dz) const {
-    auto c = [&](double x, int d) { return (static_cast<std::int64_t>(std::floor(x / spacing_)) + d) & 0x1FFFFF; };
-    return c(p.x(), dx) | (c(p.y(), dy) << 21) | (c(p.z(), dz) << 42);
+  std::array<std::int64_t, 3> cellOf(const Vec3& p) const {
+    return {static_cast<std::int64_t>(std::floor(p.x() / spacing_)), static_cast<std::int64_t>(std::floor(p.y() / spacing_)),
+            static_cast<std::int64_t>(std::floor(p.z() / spacing_))};
+  }
+  static std::int64_t key(const std::array<std::int64_t, 3>& c) {
+    return (c[0] & 0x1FFFFF) | ((c[1] & 0x1FFFFF) << 21) | ((c[2] & 0x1FFFFF) << 42);
   }
   double spacing_;
   std::unordered_map<std::int64_t, std::vector<int>> cells_;
@@ -201,6 +217,7 @@ class Laying {
   PointGrid grid_;
   std::vector<Front> fronts_;
   std::vector<std::vector<Vec3>> fieldLines_;
+  mutable std::vector<Vec2> ellPlane_;  // crossCurve's scratch: l in the tangent plane
 
   // What happened, for the notes.
   int boundedLayers_ = 0, boundedSegments_ = 0, reusedLayers_ = 0, reusedSegments_ = 0;
@@ -367,7 +384,7 @@ Segment Laying::segment(const Row& row, int i) const {
 
 bool Laying::collides(const Vec3& p, double radius) const {
   bool hit = false;
-  grid_.forNear(p, [&](int id) { hit = hit || (!inBase_[id] && (vertices_[id].point() - p).norm() < radius); });
+  grid_.forNear(p, radius, [&](int id) { hit = hit || (!inBase_[id] && (vertices_[id].point() - p).norm() < radius); });
   return hit;
 }
 
@@ -414,16 +431,34 @@ std::optional<Crossing> Laying::crossCurve(const LocalGeometry& g, const FlowLin
   }
   if (nearest < 0) return std::nullopt;
   hint = index(nearest);
+  // Everything in the tangent plane at l's start, each point once; pairs of segments whose boxes are apart
+  // cannot cross and are skipped (the boxes are padded far beyond round-off, so no crossing is missed).
+  const int ellCount = static_cast<int>(ell.points.size());
+  std::vector<Vec2>& q = ellPlane_;
+  q.resize(ellCount);
+  Eigen::AlignedBox2d ellBox;
+  for (int k = 0; k < ellCount; ++k) ellBox.extend(q[k] = toTangentPlane(g, ell.points[k].point()));
+  const double pad = 1e-9 * (ellBox.diagonal().norm() + o_.cell);
+  ellBox.min().array() -= pad;
+  ellBox.max().array() += pad;
   std::optional<Crossing> first;
+  int planeIndex = std::numeric_limits<int>::min();  // the curve point whose tangent-plane image is in `next`
+  Vec2 next = Vec2::Zero();
   for (int j = nearest - 24; j <= nearest + 24; ++j) {
     if (!L.closed && (j < 0 || j + 1 >= n)) continue;
     const int j0 = index(j), j1 = index(j + 1);
-    const Vec2 p = toTangentPlane(g, L.curve[j0].point()), r = toTangentPlane(g, L.curve[j1].point()) - p;
-    for (std::size_t k = 0; k + 1 < ell.points.size(); ++k) {
-      const Vec2 q = toTangentPlane(g, ell.points[k].point()), s = toTangentPlane(g, ell.points[k + 1].point()) - q;
+    const Vec2 p = planeIndex == j ? next : toTangentPlane(g, L.curve[j0].point());
+    next = toTangentPlane(g, L.curve[j1].point());
+    planeIndex = j + 1;
+    const Vec2 r = next - p;
+    if (std::max(p.x(), next.x()) < ellBox.min().x() || std::min(p.x(), next.x()) > ellBox.max().x() ||
+        std::max(p.y(), next.y()) < ellBox.min().y() || std::min(p.y(), next.y()) > ellBox.max().y())
+      continue;
+    for (int k = 0; k + 1 < ellCount; ++k) {
+      const Vec2 s = q[k + 1] - q[k];
       const double den = cross2(r, s);
       if (std::abs(den) < 1e-300) continue;
-      const double t = cross2(q - p, s) / den, u = cross2(q - p, r) / den;
+      const double t = cross2(q[k] - p, s) / den, u = cross2(q[k] - p, r) / den;
       if (t < 0 || t > 1 || u < 0 || u > 1) continue;
       const double arc = ellArc[k] + u * (ellArc[k + 1] - ellArc[k]);
       if (first && first->ellArc <= arc) continue;
@@ -441,8 +476,22 @@ std::optional<Crossing> Laying::crossCurve(const LocalGeometry& g, const FlowLin
 std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, const std::vector<Segment>& segments,
                                                             Row& next, bool recordConjugateLines) {
   const int n = static_cast<int>(segments.size());
-  std::vector<FlowLine> ells(n);
+  // The l_i are traced lazily: first a little beyond the ideal step, where the next base curve crosses them
+  // as a rule, and on to their full length kEllLength * step only where a crossing is not found on the part
+  // traced (FlowTracer gives the very points of a trace in one go, so the apexes are the same).
+  std::vector<std::optional<FlowTracer>> ells(n);
   std::vector<std::vector<double>> ellArcs(n);
+  auto updateArcs = [&](int i) {
+    const std::vector<SurfacePoint>& points = ells[i]->line().points;
+    std::vector<double>& arc = ellArcs[i];
+    if (arc.empty()) arc.push_back(0.0);
+    for (std::size_t k = arc.size(); k < points.size(); ++k)
+      arc.push_back(arc[k - 1] + (points[k].point() - points[k - 1].point()).norm());
+  };
+  auto finishEll = [&](int i) {
+    ells[i]->finish();
+    updateArcs(i);
+  };
   std::vector<std::optional<Apex>> apexes(n);
   int middle = -1;
   for (int i = 0; i < n; ++i) {
@@ -460,16 +509,34 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
     }
     if (s.asymptotic) cannotTile(s.M, kAsymptoticBase);
     if (!d) continue;  // a singularity of D_G: no apex here
-    ells[i] = traceFlowLine(field_, G_, s.M, *d, kEllLength * s.step, false);
-    ellArcs[i] = cumulativeArc(ells[i].points);
-    if (ells[i].length > s.step && (middle < 0 || std::abs(i - n / 2) < std::abs(middle - n / 2))) middle = i;
+    ells[i].emplace(field_, G_, s.M, *d, kEllLength * s.step, false);
+    // Past the step (strictly), so that whether l_i is longer than the step is known.
+    if (recordConjugateLines) ells[i]->finish();
+    else ells[i]->advance(std::nextafter(kEllFirst * s.step, std::numeric_limits<double>::infinity()));
+    updateArcs(i);
+    if (ells[i]->line().length > s.step && (middle < 0 || std::abs(i - n / 2) < std::abs(middle - n / 2))) middle = i;
     if (recordConjugateLines) {
       std::vector<Vec3> line;
-      for (const SurfacePoint& p : ells[i].points) line.push_back(p.point());
+      for (const SurfacePoint& p : ells[i]->line().points) line.push_back(p.point());
       fieldLines_.push_back(line);
     }
   }
   if (middle < 0) return apexes;
+  finishEll(middle);  // the next base curve starts on it, anywhere along it
+  const FlowLine& ellMiddle = ells[middle]->line();
+  // The first crossing of l_i with `next`, tracing l_i on when the part traced does not reach it.
+  auto crossing = [&](int i, int& hint) -> std::optional<Crossing> {
+    if (!ells[i]) return std::nullopt;
+    const int hint0 = hint;
+    for (;;) {
+      const FlowLine& ell = ells[i]->line();
+      std::optional<Crossing> c =
+          ell.points.size() > 1 ? crossCurve(segments[i].M.g, ell, ellArcs[i], next, hint) : std::nullopt;
+      if (c || ells[i]->finished()) return c;
+      hint = hint0;
+      finishEll(i);
+    }
+  };
 
   const Vec3 rowDirection =
       vertices_[row.ids[(middle + 1) % row.ids.size()]].point() - vertices_[row.ids[middle]].point();
@@ -480,8 +547,8 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
   std::vector<std::optional<Crossing>> crossings(n);
   double s0 = segments[middle].step;
   for (int iteration = 0; iteration < 6; ++iteration) {
-    s0 = std::min(s0, ells[middle].length);
-    const SurfacePoint start = pointAtArc(walker_, ells[middle].points, ellArcs[middle], false, ells[middle].length, s0);
+    s0 = std::min(s0, ellMiddle.length);
+    const SurfacePoint start = pointAtArc(walker_, ellMiddle.points, ellArcs[middle], false, ellMiddle.length, s0);
     const FlowLine forward = traceFlowLine(field_, F_, start, rowDirection, 1.5 * rowAhead + 4 * o_.cell, row.closed);
     next = Row{};
     if (forward.end == FlowLine::End::Closed) {
@@ -497,8 +564,7 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
     int hint = -1;
     double fit = 0, norm = 0, raise = 1;
     for (int i = 0; i < n; ++i) {
-      crossings[i] = ells[i].points.size() > 1 ? crossCurve(segments[i].M.g, ells[i], ellArcs[i], next, hint)
-                                               : std::nullopt;
+      crossings[i] = crossing(i, hint);
       if (!crossings[i]) continue;
       const double t = crossings[i]->ellArc;
       fit += segments[i].step * t;

@@ -81,3 +81,36 @@ TEST_CASE("direction_field: loxodromes keep their angle to the meridians") {
   const Vec3 end = line.points.back().point();
   CHECK(std::abs(std::atan2(end.y(), end.x())) == Approx(std::log(std::tan(75 * 3.141592653589793 / 180))).epsilon(0.01));
 }
+
+TEST_CASE("direction_field: a flow line traced in installments is the one traced in one go") {
+  const ParametricSurfacePtr torus = makeSurface("torus");
+  const SurfaceWalker walker(*torus, 0.05);
+  const DirectionField angle(walker, parseFieldSpec("angle:30"));
+  const SurfacePoint start = walker.project(Vec3(1.3, 0.2, 0.2));
+  for (const bool closure : {false, true}) {
+    const FlowLine whole = traceFlowLine(angle, Family::Conjugate, start, Vec3(0, 0, 1), 2.0, closure);
+    FlowTracer tracer(angle, Family::Conjugate, start, Vec3(0, 0, 1), 2.0, closure);
+    for (double upTo = 0.01; !tracer.finished() && upTo < 1.0; upTo *= 1.7) {
+      CHECK_FALSE(tracer.advance(upTo));
+      CHECK(tracer.line().length >= upTo);
+    }
+    const FlowLine& pieces = tracer.finish();
+    CHECK(tracer.finished());
+    CHECK(pieces.end == whole.end);
+    CHECK(pieces.length == whole.length);
+    REQUIRE(pieces.points.size() == whole.points.size());
+    for (std::size_t i = 0; i < whole.points.size(); ++i) {
+      CHECK(pieces.points[i].point() == whole.points[i].point());
+      CHECK(pieces.points[i].uv == whole.points[i].uv);
+    }
+  }
+  // Ends are reported as in one go: the boundary of a sphere band.
+  const ParametricSurfacePtr sphere = makeSurface("sphere");
+  const SurfaceWalker sw(*sphere, 0.05);
+  const DirectionField radial(sw, parseFieldSpec("radial"));
+  FlowTracer meridian(radial, Family::First, sw.project(Vec3(1, 0, 0)), Vec3(0, 0, 1), 100.0);
+  CHECK_FALSE(meridian.advance(0.5));
+  CHECK(meridian.advance(5.0));
+  CHECK(meridian.line().end == FlowLine::End::Boundary);
+  CHECK(meridian.line().length == traceFlowLine(radial, Family::First, sw.project(Vec3(1, 0, 0)), Vec3(0, 0, 1), 100.0).length);
+}

@@ -4,6 +4,7 @@
 // Everything works on any Surface in 3D: a step is taken in space and projected back onto the surface, so an
 // uploaded MeshSurface serves as well as an analytic one. Lengths are in model units.
 #pragma once
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -124,6 +125,38 @@ struct FlowLine {
 // same direction after at least three cells, closing the loop exactly at the start.
 FlowLine traceFlowLine(const DirectionField& field, Family family, const SurfacePoint& start, const Vec3& initial,
                        double maxLength, bool detectClosure = true);
+
+// traceFlowLine in installments: a flow line traced only as far as it is needed. advance(upTo) traces on
+// until the line is at least upTo long (or has ended); the points are exactly those traceFlowLine returns
+// with the same arguments, in the same order, however the tracing is split. Holds a reference to `field`.
+class FlowTracer {
+ public:
+  FlowTracer(const DirectionField& field, Family family, const SurfacePoint& start, const Vec3& initial,
+             double maxLength, bool detectClosure = true);
+  // Traces until line().length >= upTo or the line ends; returns whether it ended (finished()).
+  bool advance(double upTo);
+  // Traces to the end (maxLength, the boundary, a singularity or closure).
+  const FlowLine& finish() {
+    advance(std::numeric_limits<double>::infinity());
+    return line_;
+  }
+  bool finished() const { return finished_; }
+  // The line so far; its `end` is meaningful once finished().
+  const FlowLine& line() const { return line_; }
+  // Moves the line out (the tracer is spent).
+  FlowLine release() { return std::move(line_); }
+
+ private:
+  void attempt();  // one step of the integrator (accepted or retried with a smaller step)
+
+  const DirectionField* field_;
+  Family family_;
+  SurfacePoint start_, current_;
+  Vec3 startDirection_ = Vec3::Zero(), k1_ = Vec3::Zero();
+  double maxLength_, h_ = 0;
+  bool detectClosure_, finished_ = false;
+  FlowLine line_;
+};
 
 // Points of the polyline at arc lengths 0, spacing, 2 spacing ... (up to its end), projected onto the surface.
 // A loop (closed = true) gets round(length / spacing) points evenly spaced, so it closes without a short segment.
