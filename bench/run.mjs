@@ -5,6 +5,8 @@
 //   PHEX_BENCH_SIZES=1000     only these face counts (comma-separated; overrides PHEX_BENCH_QUICK)
 //   PHEX_BENCH_SURFACES=torus only these surfaces (comma-separated: torus, cyclide, freeform.obj)
 //   PHEX_BENCH_REPEAT=5       runs per case up to 10k faces, median reported (one run above 10k)
+//   PHEX_BENCH_CERES_100K=1   also the Ceres solvers above 10k faces (planes: ~35 s per Gauss-Newton
+//                             iteration and ~1.5 GB at 100k faces natively; volumes far more)
 //   PHEX_NATIVE_BIN, PHEX_PKG_DIR, PHEX_BENCH_OUT  other build dirs than build/native/bin, build/pkg,
 //                             build/bench (for builds outside the repository's build/)
 import { spawnSync } from 'node:child_process';
@@ -22,7 +24,8 @@ const sizes = process.env.PHEX_BENCH_SIZES ? process.env.PHEX_BENCH_SIZES.split(
 const surfaces = (process.env.PHEX_BENCH_SURFACES ?? 'torus,cyclide,freeform.obj').split(',');
 
 // Every solver side by side where it finishes in reasonable time; the Ceres ones stop at 10k faces
-// (their Gauss-Newton steps cost seconds there, see the README's table).
+// (their Gauss-Newton steps cost seconds there and about half a minute at 100k, see the README) unless
+// PHEX_BENCH_CERES_100K is set.
 const solvers = (process.env.PHEX_BENCH_SOLVERS ?? 'local,planes,volumes').split(',');
 // An uploaded free-form mesh: the free-form height field sampled finely as OBJ by phex itself.
 const freeformMesh = join(scratch, 'freeform.obj');
@@ -31,7 +34,7 @@ const cases = [];
 for (const surface of surfaces)
   for (const faces of sizes)
     for (const solver of solvers)
-      if (solver === 'local' || faces <= 10000) cases.push({ surface, faces, solver });
+      if (solver === 'local' || faces <= 10000 || process.env.PHEX_BENCH_CERES_100K) cases.push({ surface, faces, solver });
 const isMesh = (c) => c.surface.endsWith('.obj');
 // Both sides run each case `repeat` times and report the run with the median total: at 1k faces a run
 // takes ~20 ms and single runs on a shared machine scatter by ±50%. Native runs are fresh processes

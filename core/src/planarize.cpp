@@ -667,8 +667,10 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
     J.setFromTriplets(triplets.begin(), triplets.end());
     const Eigen::SparseMatrix<double> JtJ = J.transpose() * J;
     Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg(JtJ);
-    cg.setTolerance(1e-4);
-    cg.setMaxIterations(100);
+    // Tight enough that where the iterations stop (which round-off can shift by one between native code
+    // and WebAssembly) moves no vertex by more than round-off.
+    cg.setTolerance(1e-6);
+    cg.setMaxIterations(300);
     Eigen::VectorXd step = cg.solve(-(J.transpose() * r));
     if (!step.allFinite()) break;
     for (int f = 0; f < nf; ++f)
