@@ -1,6 +1,7 @@
 #include "phex/mesh_surface.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -127,6 +128,7 @@ MeshSurface::MeshSurface(TriMesh mesh, std::string name) : mesh_(std::move(mesh)
   buildTopology();
   estimateCurvature();
   buildTree();
+  buildGrid();
 }
 
 void MeshSurface::buildTopology() {
@@ -312,23 +314,25 @@ void MeshSurface::buildTree() {
   }
 }
 
-LocalGeometry MeshSurface::closestPoint(const Vec3& p) const {
-  double best = std::numeric_limits<double>::infinity();
-  int bestTriangle = 0;
-  Vec3 bestBarycentric(1, 0, 0);
+double MeshSurface::triangleDistance(int f, const Vec3& p, Vec3& barycentric) const {
+  const Vec3 a = mesh_.V.row(mesh_.F(f, 0)), b = mesh_.V.row(mesh_.F(f, 1)), c = mesh_.V.row(mesh_.F(f, 2));
+  barycentric = closestBarycentric(p, a, b, c);
+  return (barycentric(0) * a + barycentric(1) * b + barycentric(2) * c - p).squaredNorm();
+}
+
+void MeshSurface::searchTree(const Vec3& p, double& best, int& triangle, Vec3& barycentric) const {
   int stack[128];  // the tree is balanced: depth <= 25 for kMaxMeshTriangles, two entries per level
   int top = 0;
   stack[top++] = 0;
+  Vec3 bary;
   while (top > 0) {
     const Node& node = nodes_[stack[--top]];
     if (node.box.squaredExteriorDistance(p) >= best) continue;
     if (node.count > 0) {
       for (int i = node.first; i < node.first + node.count; ++i) {
         const int f = triangleOrder_[i];
-        const Vec3 a = mesh_.V.row(mesh_.F(f, 0)), b = mesh_.V.row(mesh_.F(f, 1)), c = mesh_.V.row(mesh_.F(f, 2));
-        const Vec3 bary = closestBarycentric(p, a, b, c);
-        const double d = (bary(0) * a + bary(1) * b + bary(2) * c - p).squaredNorm();
-        if (d < best) best = d, bestTriangle = f, bestBarycentric = bary;
+        const double d = triangleDistance(f, p, bary);
+        if (d < best) best = d, triangle = f, barycentric = bary;
       }
       continue;
     }
@@ -343,7 +347,145 @@ LocalGeometry MeshSurface::closestPoint(const Vec3& p) const {
       stack[top++] = node.first + 1;
     }
   }
-  return geometryInTriangle(bestTriangle, bestBarycentric);
+}
+
+void MeshSurface::buildGrid() {
+  const int nf = static_cast<int>(mesh_.F.rows());
+  const Vec3 size = bounds_.sizes();
+  // Cells about two mean edges wide hold a handful of triangles each, and a point near the mesh is usually
+  // settled by its own cell. Coarser where that would make too many cells or cell entries (long triangles).
+  const double edge = mesh_.meanEdgeLength();
+  double h = std::max(2 * edge, 1e-9 * std::max(size.maxCoeff(), 1e-300));
+  if (!(h > 0) || !std::isfinite(h)) h = std::max(size.maxCoeff(), 1.0);
+  const double maxCells = 4.0 * nf + 4096, maxEntries = 8.0 * nf + 4096;
+  std::vector<std::array<int, 6>> range(nf);  // each triangle's cell box, inclusive
+  // The cells of a triangle's box that its plane meets (the cells grown by a hair, for round-off).
+  auto forCells = [&](int f, const std::array<int, 6>& r, auto&& fn) {
+    const Vec3 a = mesh_.V.row(mesh_.F(f, 0)), b = mesh_.V.row(mesh_.F(f, 1)), c = mesh_.V.row(mesh_.F(f, 2));
+    const Vec3 n = (b - a).cross(c - a);
+    const double half = 0.5 * gridCell_ * (1 + 1e-6), reach = half * n.cwiseAbs().sum(), offset = n.dot(a);
+    const double slack = 1e-9 * n.norm() * (gridCell_ + a.cwiseAbs().maxCoeff() + bounds_.sizes().maxCoeff());
+    const bool whole = r[0] == r[3] && r[1] == r[4] && r[2] == r[5];
+    for (int k = r[2]; k <= r[5]; ++k)
+      for (int j = r[1]; j <= r[4]; ++j)
+        for (int i = r[0]; i <= r[3]; ++i) {
+          if (!whole) {
+            const Vec3 centre = gridOrigin_ + gridCell_ * Vec3(i + 0.5, j + 0.5, k + 0.5);
+            if (std::abs(n.dot(centre) - offset) > reach + slack) continue;
+          }
+          fn(i + std::size_t(gridSize_[0]) * (j + std::size_t(gridSize_[1]) * k));
+        }
+  };
+  for (int attempt = 0;; ++attempt, h *= 1.5) {
+    double cells = 1;
+    for (int a = 0; a < 3; ++a) {
+      gridSize_[a] = std::max(1, static_cast<int>(std::ceil(size(a) / h)));
+      cells *= gridSize_[a];
+    }
+    if (cells > maxCells && attempt < 200) continue;
+    gridCell_ = h;
+    gridInverseCell_ = 1 / h;
+    gridOrigin_ = bounds_.min();
+    double entries = 0;
+    // A triangle goes into every cell its box meets, the box grown by a hair so that round-off in the cell of
+    // a point on a cell face cannot lose it.
+    const double grow = 1e-9 * h;
+    for (int f = 0; f < nf && entries <= maxEntries; ++f) {
+      Box3 box;
+      for (int k = 0; k < 3; ++k) box.extend(Vec3(mesh_.V.row(mesh_.F(f, k)).transpose()));
+      for (int a = 0; a < 3; ++a) {
+        const int lo = static_cast<int>(std::floor((box.min()(a) - grow - gridOrigin_(a)) * gridInverseCell_));
+        const int hi = static_cast<int>(std::floor((box.max()(a) + grow - gridOrigin_(a)) * gridInverseCell_));
+        range[f][a] = std::clamp(lo, 0, gridSize_[a] - 1);
+        range[f][a + 3] = std::clamp(hi, 0, gridSize_[a] - 1);
+      }
+      forCells(f, range[f], [&](std::size_t) { ++entries; });
+    }
+    if (entries > maxEntries && attempt < 200) continue;
+    break;
+  }
+  spheres_.resize(nf);
+  for (int f = 0; f < nf; ++f) {
+    const Vec3 a = mesh_.V.row(mesh_.F(f, 0)), b = mesh_.V.row(mesh_.F(f, 1)), c = mesh_.V.row(mesh_.F(f, 2));
+    const Vec3 centre = (a + b + c) / 3;
+    const double radius = std::sqrt(std::max({(a - centre).squaredNorm(), (b - centre).squaredNorm(), (c - centre).squaredNorm()}));
+    spheres_[f] << centre, radius * (1 + 1e-12) + 1e-300;
+  }
+  const std::size_t cells = std::size_t(gridSize_[0]) * gridSize_[1] * gridSize_[2];
+  cellStart_.assign(cells + 1, 0);
+  for (int f = 0; f < nf; ++f) forCells(f, range[f], [&](std::size_t c) { ++cellStart_[c + 1]; });
+  std::partial_sum(cellStart_.begin(), cellStart_.end(), cellStart_.begin());
+  cellTriangles_.resize(cellStart_.back());
+  std::vector<int> fill(cellStart_.begin(), cellStart_.end() - 1);
+  for (int f = 0; f < nf; ++f) forCells(f, range[f], [&](std::size_t c) { cellTriangles_[fill[c]++] = f; });
+}
+
+bool MeshSurface::searchGrid(const Vec3& p, double& best, int& triangle, Vec3& barycentric) const {
+  int centre[3];
+  for (int a = 0; a < 3; ++a) {
+    const double q = std::floor((p(a) - gridOrigin_(a)) * gridInverseCell_);
+    centre[a] = q < 0 ? 0 : q >= gridSize_[a] ? gridSize_[a] - 1 : static_cast<int>(q);
+  }
+  auto cellId = [&](int i, int j, int k) { return i + std::size_t(gridSize_[0]) * (j + std::size_t(gridSize_[1]) * k); };
+  double bestRoot = std::sqrt(best);
+  Vec3 bary;
+  auto test = [&](int f) {
+    const Eigen::Vector4d& sphere = spheres_[f];
+    const double reach = sphere(3) + bestRoot;
+    if ((sphere.head<3>() - p).squaredNorm() > reach * reach) return;  // the triangle's ball is farther
+    const double d = triangleDistance(f, p, bary);
+    if (d < best || (d == best && f < triangle)) best = d, triangle = f, barycentric = bary, bestRoot = std::sqrt(d);
+  };
+  // The point's own cell, its triangle with the nearest centre first so that the balls reject most others.
+  {
+    const std::size_t c = cellId(centre[0], centre[1], centre[2]);
+    const int begin = cellStart_[c], end = cellStart_[c + 1];
+    if (begin == end) return false;  // an empty cell: far from the mesh, the tree
+    int first = cellTriangles_[begin];
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int e = begin; e < end; ++e) {
+      const int f = cellTriangles_[e];
+      const double d = (spheres_[f].head<3>() - p).squaredNorm();
+      if (d < nearest) nearest = d, first = f;
+    }
+    test(first);
+    for (int e = begin; e < end; ++e) test(cellTriangles_[e]);
+  }
+  // Every triangle nearer than the best so far meets the ball of that radius about p, so its box meets one of
+  // the cells the ball's box meets (the grid holds all triangles). Too many cells: the tree, from that bound.
+  const double reach = bestRoot * (1 + 1e-9) + 1e-6 * gridCell_;
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    const double l = std::floor((p(a) - reach - gridOrigin_(a)) * gridInverseCell_);
+    const double h = std::floor((p(a) + reach - gridOrigin_(a)) * gridInverseCell_);
+    lo[a] = l < 0 ? 0 : l >= gridSize_[a] ? gridSize_[a] - 1 : static_cast<int>(l);
+    hi[a] = h < 0 ? 0 : h >= gridSize_[a] ? gridSize_[a] - 1 : static_cast<int>(h);
+    if (hi[a] - lo[a] > 4) return false;
+  }
+  for (int k = lo[2]; k <= hi[2]; ++k)
+    for (int j = lo[1]; j <= hi[1]; ++j)
+      for (int i = lo[0]; i <= hi[0]; ++i) {
+        if (i == centre[0] && j == centre[1] && k == centre[2]) continue;
+        const int idx[3] = {i, j, k};
+        double d2 = 0;  // a cell farther than the best so far cannot hold a nearer triangle
+        for (int a = 0; a < 3; ++a) {
+          const double cellLo = gridOrigin_(a) + idx[a] * gridCell_, cellHi = cellLo + gridCell_;
+          const double g = p(a) < cellLo ? cellLo - p(a) : p(a) > cellHi ? p(a) - cellHi : 0.0;
+          d2 += g * g;
+        }
+        if (d2 > best * (1 + 1e-9)) continue;
+        const std::size_t c = cellId(i, j, k);
+        for (int e = cellStart_[c]; e < cellStart_[c + 1]; ++e) test(cellTriangles_[e]);
+      }
+  return true;
+}
+
+LocalGeometry MeshSurface::closestPoint(const Vec3& p) const {
+  double best = std::numeric_limits<double>::infinity();
+  int triangle = 0;
+  Vec3 barycentric(1, 0, 0);
+  if (!searchGrid(p, best, triangle, barycentric)) searchTree(p, best, triangle, barycentric);
+  return geometryInTriangle(triangle, barycentric);
 }
 
 std::string curvatureCsv(const std::vector<LocalGeometry>& rows) {

@@ -159,8 +159,9 @@ namespace {
 // and the most elliptic and the most hyperbolic of some 150 samples of the surface — are laid at a
 // half the size (at most 1000 faces), and the one whose triangulation covers most of the surface
 // with the fewest invalid stars and self-intersecting faces of its Dupin dual wins.
+// `trialCell` and `trialVertices` receive the winning trial lay's cell and vertex count (else stay 0).
 std::optional<Vec3> chooseStart(const Surface& surface, const LayingOptions& options, int faces,
-                                const CancelFlag* cancel, std::string& note) {
+                                const CancelFlag* cancel, std::string& note, double& trialCell, double& trialVertices) {
   std::vector<LocalGeometry> samples;
   if (const auto* p = dynamic_cast<const ParametricSurface*>(&surface)) {
     const auto d = p->domain();
@@ -184,6 +185,7 @@ std::optional<Vec3> chooseStart(const Surface& surface, const LayingOptions& opt
   trial.cell = options.cell * std::sqrt(double(faces) / trialFaces);
   double bestScore = -std::numeric_limits<double>::infinity();
   std::optional<Vec3> best;
+  double bestVertices = 0;
   int laid = 0;
   for (const Vec3& c : candidates) {
     trial.start = c;
@@ -201,9 +203,11 @@ std::optional<Vec3> chooseStart(const Surface& surface, const LayingOptions& opt
     // The middle of the bounds (the first candidate) keeps the start unless another is clearly better: at a
     // quarter of the size small differences are noise.
     const double score = (check.coverage >= 0 ? check.coverage : 1.0) - 5 * bad - (laid > 1 ? 0.05 : 0.0);
-    if (score > bestScore) bestScore = score, best = c;
+    if (score > bestScore) bestScore = score, best = c, bestVertices = double(t.mesh.V.rows());
   }
   if (laid < 2 || !best) return std::nullopt;  // nothing to choose between: the default start
+  trialCell = trial.cell;
+  trialVertices = bestVertices;
   std::ostringstream s;
   s << "start chosen among " << laid << " candidates by trial lays at about " << trialFaces << " faces: near ("
     << best->x() << ", " << best->y() << ", " << best->z() << ")";
@@ -260,8 +264,28 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       lo.start = params.start;
       lo.baseDirection = params.direction;
       std::string startNote;
-      if (!lo.start) lo.start = chooseStart(*t.surface, lo, params.faces, cancel, startNote);
-      t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
+      double trialCell = 0, trialVertices = 0;
+      if (!lo.start) lo.start = chooseStart(*t.surface, lo, params.faces, cancel, startNote, trialCell, trialVertices);
+      // The trial lay from the chosen start already measured how far the vertex count falls short of the area
+      // estimate (layers stopping short leave parts uncovered): when by more than 10 %, start from the cell it
+      // predicts, and the secant below takes it as its first point, which saves a lay. (A trial with more
+      // vertices than the estimate says little: coarse rows are resampled to keep a minimum count.)
+      // If that cell cannot be laid, the area estimate's is, as without the trial. Only for an uploaded mesh,
+      // whose lays are the slowest (closest points on the mesh); an analytic surface keeps the area estimate.
+      bool fromTrial = params.mesh && params.cell == 0 && trialVertices > 0 && trialCell > cell &&
+                       trialVertices * trialCell * trialCell / (cell * cell) < params.faces / 1.1;
+      if (fromTrial) {
+        lo.cell = std::clamp(trialCell * std::sqrt(trialVertices / params.faces), 0.5 * cell, cell);
+        if (std::pow(cellForFaceCount(*t.surface, 1) / lo.cell, 2) > kMaxFaces) lo.cell = cell;
+        try {
+          t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
+        } catch (const Error& e) {
+          if (e.code() != ErrorCode::CannotTile) throw;
+          fromTrial = false;
+          lo.cell = cell;
+        }
+      }
+      if (!fromTrial) t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
       // Layers of ideal triangles are not equilateral, and they may leave parts of the surface uncovered, so
       // the vertex count (one hexagon each) differs from the area estimate. When a face count was asked for
       // and missed by more than 10 %, lay again (at most twice): first with the cell scaled by the square root
@@ -269,11 +293,13 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       auto miss = [&](const Triangulation& tr) {
         return std::abs(std::log(double(std::max<Eigen::Index>(tr.mesh.V.rows(), 1)) / params.faces));
       };
-      double cells[3] = {cell, 0, 0}, counts[3] = {double(t.triangulation.mesh.V.rows()), 0, 0};
+      double cells[3] = {lo.cell, 0, 0}, counts[3] = {double(t.triangulation.mesh.V.rows()), 0, 0};
       for (int attempt = 1; attempt < 3 && params.cell == 0 && miss(t.triangulation) > std::log(1.1); ++attempt) {
         double exponent = 2;  // vertices ~ cell^-2 on a fully covered surface
         if (attempt == 2 && counts[1] > 0 && counts[0] > 0 && std::abs(std::log(cells[1] / cells[0])) > 1e-3)
           exponent = std::clamp(-std::log(counts[1] / counts[0]) / std::log(cells[1] / cells[0]), 0.5, 4.0);
+        else if (attempt == 1 && fromTrial && counts[0] > 0 && std::abs(std::log(trialCell / cells[0])) > 1e-3)
+          exponent = std::clamp(-std::log(trialVertices / counts[0]) / std::log(trialCell / cells[0]), 0.5, 4.0);
         lo.cell = cells[attempt - 1] * std::pow(std::max(counts[attempt - 1], 1.0) / params.faces, 1 / exponent);
         cells[attempt] = lo.cell;
         if (std::pow(cellForFaceCount(*t.surface, 1) / lo.cell, 2) > kMaxFaces) break;

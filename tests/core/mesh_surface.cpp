@@ -322,3 +322,74 @@ TEST_CASE("mesh_surface: the curvature table keeps the file's vertex order") {
   CHECK(csv.rfind("x,y,z,k1,k2,d1x,d1y,d1z,d2x,d2y,d2z\n", 0) == 0);
   CHECK(std::count(csv.begin(), csv.end(), '\n') == static_cast<long>(rows.size()) + 1);
 }
+
+namespace {
+
+// The nearest point over every triangle, by brute force: the projection onto the triangle's plane when it
+// falls inside, else the nearest point of its edges (independent of MeshSurface's own triangle test).
+Vec3 bruteNearest(const MeshSurface& m, const Vec3& p) {
+  double best = 1e300;
+  Vec3 foot = Vec3::Zero();
+  for (int f = 0; f < m.mesh().F.rows(); ++f) {
+    const Vec3 a = m.mesh().V.row(m.mesh().F(f, 0)), b = m.mesh().V.row(m.mesh().F(f, 1)), c = m.mesh().V.row(m.mesh().F(f, 2));
+    const Vec3 n = (b - a).cross(c - a);
+    Vec3 q = p - n.dot(p - a) / n.squaredNorm() * n;  // projection onto the plane
+    const double A = n.squaredNorm();
+    const double u = (c - b).cross(q - b).dot(n) / A, v = (a - c).cross(q - c).dot(n) / A, w = 1 - u - v;
+    if (u < 0 || v < 0 || w < 0) {  // outside: the nearest point is on an edge
+      double edgeBest = 1e300;
+      const Vec3 corners[3] = {a, b, c};
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 s = corners[k], e = corners[(k + 1) % 3];
+        const double t = std::clamp((p - s).dot(e - s) / (e - s).squaredNorm(), 0.0, 1.0);
+        const Vec3 x = s + t * (e - s);
+        if ((x - p).squaredNorm() < edgeBest) edgeBest = (x - p).squaredNorm(), q = x;
+      }
+    }
+    if ((q - p).squaredNorm() < best) best = (q - p).squaredNorm(), foot = q;
+  }
+  return foot;
+}
+
+}  // namespace
+
+TEST_CASE("mesh_surface: the closest point is the nearest over all triangles, near and far from the mesh") {
+  const ParametricSurfacePtr torus = makeSurface("torus");
+  // A fine torus, a coarse one (points far inside the cells) and a sheet with triangles of very unequal sizes.
+  std::vector<TriMesh> meshes = {sample(*torus, 120, 40, 0.3).mesh, sample(*torus, 12, 5, 0.2).mesh};
+  {
+    TriMesh sheet;
+    const int n = 30;
+    sheet.V.resize((n + 1) * (n + 1), 3);
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; j <= n; ++j) {
+        const double x = std::pow(double(i) / n, 3), y = double(j) / n;  // columns crowded near x = 0
+        sheet.V.row(i * (n + 1) + j) << x, y, 0.2 * std::sin(3 * x + 2 * y) + 0.01 * noise(i * 97 + j, 3);
+      }
+    sheet.F.resize(2 * n * n, 3);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const int a = i * (n + 1) + j, b = a + n + 1;
+        sheet.F.row(2 * (i * n + j)) << a, b, b + 1;
+        sheet.F.row(2 * (i * n + j) + 1) << a, b + 1, a + 1;
+      }
+    meshes.push_back(sheet);
+  }
+  for (const TriMesh& mesh : meshes) {
+    const MeshSurface m(mesh, "test");
+    const Vec3 centre = m.bounds().center(), size = m.bounds().sizes();
+    const double diagonal = size.norm();
+    for (int i = 0; i < 400; ++i) {
+      Vec3 p;
+      if (i % 2 == 0) {  // near the mesh: a vertex moved a little (as the laying and the measures ask)
+        const int v = static_cast<int>((noise(i, 21) + 1) / 2 * (m.vertexCount() - 1));
+        const double scale = i % 4 == 0 ? 1e-4 : 2e-2;
+        p = m.vertexGeometry(v).point + scale * diagonal * Vec3(noise(i, 22), noise(i, 23), noise(i, 24));
+      } else {  // anywhere in twice the bounds, also outside them
+        p = centre + size.cwiseProduct(Vec3(noise(i, 25), noise(i, 26), noise(i, 27)));
+      }
+      const Vec3 expected = bruteNearest(m, p), got = m.closestPoint(p).point;
+      CHECK((got - p).norm() == Approx((expected - p).norm()).margin(1e-12 * diagonal));
+    }
+  }
+}

@@ -17,7 +17,10 @@ namespace phex {
 //   interpolated barycentrically and the tensor is restricted to the tangent plane of the interpolated
 //   normal before its eigen-decomposition, so curvatures and directions vary smoothly (eigenvectors are
 //   never interpolated, they flip sign and swap);
-// - closest points are found through an AABB tree over the triangles.
+// - closest points are found exactly through a uniform grid of cells about two mean edges wide (the
+//   triangles whose boxes meet each cell), searched in growing shells of cells around the query until the
+//   nearest triangle found is provably the nearest, falling back to an AABB tree over the triangles for
+//   points far from the mesh.
 // Normals follow the triangles' orientation (CCW seen from the normal side).
 class MeshSurface : public Surface {
  public:
@@ -55,6 +58,14 @@ class MeshSurface : public Surface {
   void buildTopology();
   void estimateCurvature();
   void buildTree();
+  void buildGrid();
+  // Squared distance from p to triangle f, and the barycentric coordinates of the nearest point on it.
+  double triangleDistance(int f, const Vec3& p, Vec3& barycentric) const;
+  // Lowers `best` (a squared distance) to the nearest triangle's, setting `triangle` and `barycentric`.
+  void searchTree(const Vec3& p, double& best, int& triangle, Vec3& barycentric) const;
+  // The same through the grid; false when the shells searched cannot prove the nearest (then `best` is
+  // still an upper bound, reached by `triangle`).
+  bool searchGrid(const Vec3& p, double& best, int& triangle, Vec3& barycentric) const;
 
   TriMesh mesh_;
   std::string name_;
@@ -66,6 +77,13 @@ class MeshSurface : public Surface {
   std::vector<Eigen::Matrix3d> shapeTensor_;  // k1 d1 d1^T + k2 d2 d2^T per vertex
   std::vector<Node> nodes_;
   std::vector<int> triangleOrder_;
+  // Grid: cell (i, j, k) covers origin + h [i, i+1] x [j, j+1] x [k, k+1]; its triangles are
+  // cellTriangles_[cellStart_[c] .. cellStart_[c + 1]) with c = i + n0 (j + n1 k).
+  Vec3 gridOrigin_ = Vec3::Zero();
+  double gridCell_ = 0, gridInverseCell_ = 0;
+  int gridSize_[3] = {0, 0, 0};
+  std::vector<int> cellStart_, cellTriangles_;
+  std::vector<Eigen::Vector4d> spheres_;  // per triangle: a ball holding it (centre, radius), for quick rejection
 };
 
 // `phex curvature` output: one row per entry of `rows` (for a MeshSurface, its vertexGeometries(), in the
