@@ -25,7 +25,8 @@ constexpr double kResampleBelow = 0.55, kResampleAbove = 1.8;  // row spacing / 
 constexpr double kValidMargin = 1.1;  // Method 2 keeps the apexes this far above DE (in units of validStep)
 constexpr double kZipGap = 1.6;       // fronts facing each other closer than this many steps are zipped
 constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
-constexpr double kEllFirst = 1.5;     // ... at first only this many: further where no crossing is found
+constexpr double kEllFirst = 1.5;
+constexpr int kParabolicSamples = 400;  // samples of the surface that vote for the family along parabolic curves     // ... at first only this many: further where no crossing is found
 
 const char* const kAsymptoticBase =
     "the base curve runs (almost) along an asymptotic direction, which is self-conjugate (§4.2, Prop. 5), so no "
@@ -969,6 +970,35 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
   return t;
 }
 
+// §5.3 and §7: where a surface has parabolic curves, the network should contain them, so that the layers
+// cross them row by row instead of every row crossing them (a torus laid along its meridians has no valid
+// laying, Fig. 19; rows along the parallels cross the parabolic circles one layer at a time). The family
+// the rows should follow is the one more nearly tangent to the parabolic curves — the tangent there is
+// normal to the gradient of K, estimated by central differences — decided by a vote over the surface's
+// near-parabolic samples when it is clear (two thirds, from at least three samples). nullopt on surfaces
+// without parabolic points.
+std::optional<Family> familyAlongParabolicCurves(const SurfaceWalker& walker, const DirectionField& field) {
+  const Surface& surface = walker.surface();
+  const double h = 1e-3 * surface.bounds().diagonal().norm();
+  int first = 0, conjugate = 0;
+  for (const LocalGeometry& g : surface.samples(kParabolicSamples)) {
+    const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
+    if (!(kmax > 0) || std::abs(g.k1 * g.k2) > kNearParabolic * kmax * kmax) continue;
+    auto K = [&](const Vec3& d) { return surface.closestPoint(g.point + h * d).gaussianCurvature(); };
+    const Vec3 gradient = (K(g.d1) - K(-g.d1)) * g.d1 + (K(g.d2) - K(-g.d2)) * g.d2;
+    if (!(gradient.norm() > 0)) continue;
+    const Vec3 tangent = g.normal.cross(gradient).normalized();
+    const SurfacePoint p = walker.project(g.point);
+    const std::optional<Vec3> dF = field.direction(p, Family::First), dG = field.direction(p, Family::Conjugate);
+    if (!dF || !dG) continue;
+    (std::abs(dF->dot(tangent)) >= std::abs(dG->dot(tangent)) ? first : conjugate) += 1;
+  }
+  if (first + conjugate < 3) return std::nullopt;
+  if (3 * first >= 2 * (first + conjugate)) return Family::First;
+  if (3 * conjugate >= 2 * (first + conjugate)) return Family::Conjugate;
+  return std::nullopt;
+}
+
 }  // namespace
 
 double stepLowerBound(double r, double b) {
@@ -1029,7 +1059,9 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
   } else if (options.baseDirection) {
     family = std::abs(dF->dot(hint)) >= std::abs(dG->dot(hint)) ? Family::First : Family::Conjugate;
   } else if (options.base == BaseFamily::Auto) {
-    family = normalCurvature(*dF) <= normalCurvature(*dG) ? Family::First : Family::Conjugate;
+    const std::optional<Family> alongParabolic = familyAlongParabolicCurves(walker, field);
+    family = alongParabolic ? *alongParabolic
+                            : normalCurvature(*dF) <= normalCurvature(*dG) ? Family::First : Family::Conjugate;
   } else {
     family = options.base == BaseFamily::First ? Family::First : Family::Conjugate;
   }

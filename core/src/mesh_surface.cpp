@@ -480,6 +480,13 @@ bool MeshSurface::searchGrid(const Vec3& p, double& best, int& triangle, Vec3& b
   return true;
 }
 
+std::vector<LocalGeometry> MeshSurface::samples(int count) const {
+  const Eigen::Index step = std::max<Eigen::Index>(1, mesh_.V.rows() / std::max(count, 1));
+  std::vector<LocalGeometry> out;
+  for (Eigen::Index v = 0; v < mesh_.V.rows(); v += step) out.push_back(closestPoint(mesh_.V.row(v).transpose()));
+  return out;
+}
+
 LocalGeometry MeshSurface::closestPoint(const Vec3& p) const {
   double best = std::numeric_limits<double>::infinity();
   int triangle = 0;

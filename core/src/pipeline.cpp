@@ -162,17 +162,7 @@ namespace {
 // `trialCell` and `trialVertices` receive the winning trial lay's cell and vertex count (else stay 0).
 std::optional<Vec3> chooseStart(const Surface& surface, const LayingOptions& options, int faces,
                                 const CancelFlag* cancel, std::string& note, double& trialCell, double& trialVertices) {
-  std::vector<LocalGeometry> samples;
-  if (const auto* p = dynamic_cast<const ParametricSurface*>(&surface)) {
-    const auto d = p->domain();
-    for (int i = 0; i < 12; ++i)
-      for (int j = 0; j < 12; ++j)
-        samples.push_back(p->geometryAt(d.u0 + (d.u1 - d.u0) * (i + 0.5) / 12, d.v0 + (d.v1 - d.v0) * (j + 0.5) / 12));
-  } else if (const auto* m = dynamic_cast<const MeshSurface*>(&surface)) {
-    const auto& V = m->mesh().V;
-    const Eigen::Index step = std::max<Eigen::Index>(1, V.rows() / 150);
-    for (Eigen::Index v = 0; v < V.rows(); v += step) samples.push_back(surface.closestPoint(V.row(v).transpose()));
-  }
+  const std::vector<LocalGeometry> samples = surface.samples(150);  // a 12 x 12 grid on a parametric surface
   if (samples.empty()) return std::nullopt;
   std::vector<Vec3> candidates = {surface.bounds().center()};
   const auto byK = [](const LocalGeometry& a, const LocalGeometry& b) { return a.gaussianCurvature() < b.gaussianCurvature(); };

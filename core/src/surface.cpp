@@ -7,6 +7,17 @@
 
 namespace phex {
 
+std::vector<LocalGeometry> ParametricSurface::samples(int count) const {
+  const Domain d = domain();
+  const int side = std::max(1, static_cast<int>(std::lround(std::sqrt(std::max(count, 1)))));
+  std::vector<LocalGeometry> out;
+  out.reserve(side * side);
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j)
+      out.push_back(geometryAt(d.u0 + (d.u1 - d.u0) * (i + 0.5) / side, d.v0 + (d.v1 - d.v0) * (j + 0.5) / side));
+  return out;
+}
+
 LocalGeometry ParametricSurface::geometryAt(double u, double v) const {
   const Jet j = jet(u, v);
   LocalGeometry g;

@@ -8,6 +8,7 @@
 #include "phex/duality.hpp"
 #include "phex/error.hpp"
 #include "phex/laying.hpp"
+#include "phex/pipeline.hpp"
 #include "phex/mesh_surface.hpp"
 #include "phex/metrics.hpp"
 #include "phex/surfaces.hpp"
@@ -375,4 +376,25 @@ TEST_CASE("laying: an uploaded sphere (umbilic everywhere, noisy estimated direc
   CHECK(q.check.regularFraction >= 0.95);
   CHECK(q.invalid <= 0.002 * q.check.interiorVertices);
   CHECK(q.selfIntersecting == 0);
+}
+
+TEST_CASE("laying: on a surface with parabolic curves the rows follow the family that runs along them (§5.3, Fig. 19)") {
+  // From the inner equator of the cyclide the smaller normal curvature is along the meridian circles, whose
+  // rows would all cross both parabolic circles; the family along the parabolic circles is the other one.
+  PipelineParams p;
+  p.surface = "cyclide";
+  p.method = TriangulationMethod::Prespecified;
+  p.faces = 2000;
+  p.start = Vec3(-0.3, 0, 0);
+  const PipelineResult along = runPipeline(p);
+  p.direction = Vec3(0, 0, 1);  // the meridian circles there
+  const PipelineResult across = runPipeline(p);
+  INFO("self-intersecting faces: along " << along.metrics.selfIntersectingCount << ", across "
+                                         << across.metrics.selfIntersectingCount);
+  CHECK(along.metrics.selfIntersectingCount < 0.6 * across.metrics.selfIntersectingCount);
+  // From the outer equator both rules agree, and the laying is nearly clean.
+  p.start = Vec3(1.5, 0, 0);
+  p.direction.reset();
+  const PipelineResult outer = runPipeline(p);
+  CHECK(outer.metrics.selfIntersectingCount <= 3);
 }

@@ -28,8 +28,9 @@ const char* layingMethodName(LayingMethod method);
 
 // Which family of the conjugate network (field, conjugate field) the base curves follow.
 enum class BaseFamily {
-  Auto,       // the one of smaller normal curvature at the start point (on a developable: the rulings; on a
-              // torus: the parallels, the only feasible choice of §7 / Fig. 19)
+  Auto,       // on a surface with parabolic curves, the family that runs along them (§5.3: the network should
+              // contain them; on a torus the parallels, the only feasible choice of Fig. 19);
+              // elsewhere the one of smaller normal curvature at the start point (on a developable: the rulings)
   First,      // the field itself (D_F)
   Conjugate   // its conjugate (D_G)
 };

@@ -35,6 +35,8 @@ class MeshSurface : public Surface {
   std::string name() const override { return name_; }
   // Nearest point over all triangles, with the interpolated geometry there.
   LocalGeometry closestPoint(const Vec3& p) const override;
+  // Every k-th vertex of the mesh, with its estimated geometry.
+  std::vector<LocalGeometry> samples(int count) const override;
   Box3 bounds() const override { return bounds_; }
   bool isClosed() const override { return boundaryLoops_.empty(); }
 

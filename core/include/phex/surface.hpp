@@ -20,6 +20,9 @@ class Surface {
   virtual Box3 bounds() const = 0;
   // True when the surface has no boundary (sphere, torus, ...).
   virtual bool isClosed() const = 0;
+  // About `count` points spread over the surface, with their local geometry (for choices made from an
+  // overview of the shape: where to start laying, which family runs along the parabolic curves).
+  virtual std::vector<LocalGeometry> samples(int count) const = 0;
 };
 
 // A surface given by P(u, v) on [u0, u1] x [v0, v1] with exact first and second derivatives.
@@ -41,6 +44,8 @@ class ParametricSurface : public Surface {
   Vec3 position(double u, double v) const { return jet(u, v).P; }
   // Normal, principal curvatures and directions at (u, v), from the two fundamental forms.
   LocalGeometry geometryAt(double u, double v) const;
+  // A grid over the parameter domain, cell midpoints.
+  std::vector<LocalGeometry> samples(int count) const override;
   // Projects p onto the surface by Newton's method on (u, v), starting from `uv`; returns the
   // parameters of the foot point (clamped to the domain, wrapped in periodic directions).
   Vec2 project(const Vec3& p, Vec2 uv) const;
