@@ -302,6 +302,9 @@ TEST_CASE("laying: free-form surface with parabolic curves (Fig. 22)") {
   const ParametricSurfacePtr s = makeSurface("freeform");
   LayingOptions o = options(0.1, LayingMethod::Prespecified);
   o.start = Vec3(1, -1, 0);
+  // Its parabolic curves are closed rings around the bumps; BaseFamily::Auto takes the family along them,
+  // which from this corner covers a quarter of the square. The figure is laid with the other family.
+  o.base = BaseFamily::Conjugate;
   const Triangulation t = layTriangulation(*s, o);
   // Known shortfall: 4 invalid stars of 524 (24 before the star repair), 29 self-intersecting dual faces and
   // edges from 0.29 to 4.5 cells where rows meet between the bumps and around the umbilics at their tops.
