@@ -5,6 +5,7 @@
 // conjugate directions. Each such vertex is moved a little within the surface, to the position that makes
 // its own star and its neighbours' stars valid, judged exactly as checkTriangulation judges them.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -44,6 +45,11 @@ TriangleState triangleState(const LocalGeometry& g, const Vec2& a, const Vec2& b
   return r;
 }
 
+// The repair keeps, for every judged star, the state of each of its triangles (triangleState at the star's
+// centre), and refreshes only the entries a move touches: a vertex's own star (its position and geometry
+// changed) and the triangles of its neighbours' stars that have it as a corner. A candidate position is then
+// judged by re-evaluating those triangles alone and summing the rest from the cache, in the order a full
+// evaluation would sum them, so the sums — and every decision — are exactly those of a full evaluation.
 class Repair {
  public:
   Repair(Triangulation& t, const Surface& surface)
@@ -52,20 +58,47 @@ class Repair {
     if (!parametric_ || static_cast<int>(t.uv.size()) != T_.V.rows()) parametric_ = nullptr;
     const int nv = static_cast<int>(T_.V.rows());
     checkable_ = judgedStars(T_, rings_, geo_, T_.meanEdgeLength());  // the stars checkTriangulation judges
-    neighbours_.resize(nv);
+    // The cache of triangle states: entry cacheStart_[u] + i for the i-th triangle of u's star (judged u only).
+    cacheStart_.assign(nv + 1, 0);
+    for (int v = 0; v < nv; ++v)
+      cacheStart_[v + 1] = cacheStart_[v] + (checkable_[v] ? static_cast<int>(rings_.triangles[v].size()) : 0);
+    cache_.resize(cacheStart_[nv]);
+    for (int v = 0; v < nv; ++v)
+      if (checkable_[v])
+        for (std::size_t i = 0; i < rings_.triangles[v].size(); ++i)
+          cache_[cacheStart_[v] + i] = starTriangle(v, rings_.triangles[v][i]);
+  }
+
+  bool invalid(int v) const {
+    if (!checkable_[v]) return false;
+    for (int i = cacheStart_[v]; i < cacheStart_[v + 1]; ++i)
+      if (!cache_[i].valid) return true;
+    return false;
+  }
+
+  // What the sweeps need besides the cache (left out when no star is invalid).
+  void prepare() {
+    const int nv = static_cast<int>(T_.V.rows());
+    // Neighbours, flattened: neighbourStart_[v] .. neighbourStart_[v + 1] in neighbourList_, sorted.
+    neighbourStart_.assign(nv + 1, 0);
+    std::vector<int> ring;
     for (int v = 0; v < nv; ++v) {
+      ring.clear();
       for (int f : rings_.triangles[v])
         for (int k = 0; k < 3; ++k)
-          if (T_.F(f, k) != v) neighbours_[v].push_back(T_.F(f, k));
-      std::sort(neighbours_[v].begin(), neighbours_[v].end());
-      neighbours_[v].erase(std::unique(neighbours_[v].begin(), neighbours_[v].end()), neighbours_[v].end());
+          if (T_.F(f, k) != v) ring.push_back(T_.F(f, k));
+      std::sort(ring.begin(), ring.end());
+      ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+      neighbourList_.insert(neighbourList_.end(), ring.begin(), ring.end());
+      neighbourStart_[v + 1] = static_cast<int>(neighbourList_.size());
     }
     original_ = T_.V;
     laidShortest_.resize(nv);
     for (int v = 0; v < nv; ++v) laidShortest_[v] = shortestEdge(v);
+    minArea_.assign(nv, 0.0);
+    movedAt_.assign(nv, 0);
+    idleAt_.assign(nv, -1);
   }
-
-  bool invalid(int v) const { return checkable_[v] && starState(v).first > 0; }
 
   RepairResult run(int maxSweeps) {
     RepairResult r;
@@ -74,24 +107,27 @@ class Repair {
     for (int v = 0; v < nv; ++v)
       if (invalid(v)) bad.push_back(v);
     r.invalidBefore = static_cast<int>(bad.size());
+    if (bad.empty()) return r;
+    prepare();
     std::vector<char> moved(nv, 0);
+    std::vector<int> work, changed;
     for (int sweep = 0; sweep < maxSweeps && !bad.empty(); ++sweep) {
       ++r.sweeps;
       // The invalid stars' centres and their neighbours: moving any of them changes an invalid star.
-      std::vector<int> work;
+      work.clear();
       for (int v : bad) {
         work.push_back(v);
-        work.insert(work.end(), neighbours_[v].begin(), neighbours_[v].end());
+        work.insert(work.end(), nbBegin(v), nbEnd(v));
       }
       std::sort(work.begin(), work.end());
       work.erase(std::unique(work.begin(), work.end()), work.end());
       bool progress = false;
-      std::vector<int> changed;  // stars a move touched: the moved vertex's and its neighbours'
+      changed.clear();  // stars a move touched: the moved vertex's and its neighbours'
       for (int v : work)
         if (rings_.closed[v] && !rings_.triangles[v].empty() && improve(v)) {
           moved[v] = 1, progress = true;
           changed.push_back(v);
-          changed.insert(changed.end(), neighbours_[v].begin(), neighbours_[v].end());
+          changed.insert(changed.end(), nbBegin(v), nbEnd(v));
         }
       // Only the stars around moved vertices can have changed.
       changed.insert(changed.end(), bad.begin(), bad.end());
@@ -111,97 +147,199 @@ class Repair {
   }
 
  private:
-  // (invalid triangles, total violation) of u's star, with u's own geometry.
-  std::pair<int, double> starState(int u) const {
+  const int* nbBegin(int v) const { return neighbourList_.data() + neighbourStart_[v]; }
+  const int* nbEnd(int v) const { return neighbourList_.data() + neighbourStart_[v + 1]; }
+
+  // Triangle f of u's star, judged at u with u's geometry.
+  TriangleState starTriangle(int u, int f) const {
     const LocalGeometry& g = geo_[u];
-    int count = 0;
-    double total = 0;
-    for (int f : rings_.triangles[u]) {
-      int k = 0;
-      while (T_.F(f, k) != u) ++k;
-      const Vec2 a = toTangentPlane(g, T_.V.row(T_.F(f, (k + 1) % 3)).transpose());
-      const Vec2 b = toTangentPlane(g, T_.V.row(T_.F(f, (k + 2) % 3)).transpose());
-      const TriangleState st = triangleState(g, a, b);
-      count += !st.valid;
-      total += st.violation;
-    }
-    return {count, total};
+    int k = 0;
+    while (T_.F(f, k) != u) ++k;
+    const Vec2 a = toTangentPlane(g, T_.V.row(T_.F(f, (k + 1) % 3)).transpose());
+    const Vec2 b = toTangentPlane(g, T_.V.row(T_.F(f, (k + 2) % 3)).transpose());
+    return triangleState(g, a, b);
   }
 
-  // The checkable stars that v's position affects: its own and its neighbours'.
-  std::pair<int, double> localState(int v) const {
+  // After v moved: its own star's entries and its neighbours' triangles with v as a corner.
+  void refresh(int v) {
+    if (checkable_[v])
+      for (std::size_t i = 0; i < rings_.triangles[v].size(); ++i)
+        cache_[cacheStart_[v] + i] = starTriangle(v, rings_.triangles[v][i]);
+    for (const int* u = nbBegin(v); u != nbEnd(v); ++u) {
+      if (!checkable_[*u]) continue;
+      const std::vector<int>& tris = rings_.triangles[*u];
+      for (std::size_t i = 0; i < tris.size(); ++i)
+        if (T_.F(tris[i], 0) == v || T_.F(tris[i], 1) == v || T_.F(tris[i], 2) == v)
+          cache_[cacheStart_[*u] + i] = starTriangle(*u, tris[i]);
+    }
+  }
+
+  // (stars with an invalid triangle, total violation) over the judged stars that v's position affects — its
+  // own and its neighbours' — from the cache (up to date with the positions now).
+  std::pair<int, double> cachedLocalState(int v) const {
     int count = 0;
     double total = 0;
     auto add = [&](int u) {
       if (!checkable_[u]) return;
-      const auto [c, s] = starState(u);
+      int c = 0;
+      double s = 0;
+      for (int i = cacheStart_[u]; i < cacheStart_[u + 1]; ++i) {
+        c += !cache_[i].valid;
+        s += cache_[i].violation;
+      }
       count += c > 0;
       total += s;
     };
     add(v);
-    for (int u : neighbours_[v]) add(u);
+    for (const int* u = nbBegin(v); u != nbEnd(v); ++u) add(*u);
     return {count, total};
   }
 
+  // The same with v where it is now (a candidate position, geometry in geo_[v]) while the cache still holds
+  // its previous position: v's star and the touched_ triangles are evaluated afresh, the rest read. Both
+  // sums only grow star by star (violations are >= 0), so as soon as the partial state cannot beat `best`
+  // (by the acceptance test of improve) the evaluation stops and returns false; else true with the state.
+  bool candidateState(int v, const std::pair<int, double>& best, std::pair<int, double>& out) const {
+    const double threshold = best.second * (1 - 1e-9) - 1e-15;
+    int count = 0;
+    double total = 0;
+    auto beaten = [&] { return count > best.first || (count == best.first && !(total < threshold)); };
+    if (checkable_[v]) {
+      int c = 0;
+      double s = 0;
+      for (int f : rings_.triangles[v]) {
+        const TriangleState st = starTriangle(v, f);
+        c += !st.valid;
+        s += st.violation;
+      }
+      count += c > 0;
+      total += s;
+      if (beaten()) return false;
+    }
+    std::size_t next = 0;  // touched_ is grouped by neighbour, in neighbour order, ascending within
+    for (const int* pu = nbBegin(v); pu != nbEnd(v); ++pu) {
+      const int u = *pu;
+      if (!checkable_[u]) continue;
+      int c = 0;
+      double s = 0;
+      const int n = cacheStart_[u + 1] - cacheStart_[u];
+      for (int i = 0; i < n; ++i) {
+        if (next < touched_.size() && touched_[next].first == u && touched_[next].second == i) {
+          ++next;
+          const TriangleState st = starTriangle(u, rings_.triangles[u][i]);
+          c += !st.valid;
+          s += st.violation;
+        } else {
+          const TriangleState& st = cache_[cacheStart_[u] + i];
+          c += !st.valid;
+          s += st.violation;
+        }
+      }
+      count += c > 0;
+      total += s;
+      if (beaten()) return false;
+    }
+    out = {count, total};
+    return true;
+  }
+
   // The orientation of v's triangles seen along the surface normal at v: all must keep theirs.
-  bool foldsOver(int v, const std::vector<int>& signs) const {
+  bool foldsOver(int v) const {
     const Vec3 n = geo_[v].normal;
     int i = 0;
     for (int f : rings_.triangles[v]) {
       const Vec3 a = T_.V.row(T_.F(f, 0)), b = T_.V.row(T_.F(f, 1)), c = T_.V.row(T_.F(f, 2));
       const double s = (b - a).cross(c - a).dot(n);
-      if ((s > 0 ? 1 : -1) != signs[i++] || std::abs(s) < 1e-3 * minArea_[v]) return true;
+      if ((s > 0 ? 1 : -1) != signs_[i++] || std::abs(s) < 1e-3 * minArea_[v]) return true;
     }
     return false;
   }
 
   double shortestEdge(int v) const {
     double shortest = std::numeric_limits<double>::infinity();
-    for (int u : neighbours_[v]) shortest = std::min(shortest, (T_.V.row(u) - T_.V.row(v)).norm());
+    for (const int* u = nbBegin(v); u != nbEnd(v); ++u) shortest = std::min(shortest, (T_.V.row(*u) - T_.V.row(v)).norm());
     return shortest;
   }
 
+  // Whether improve(v) is known to leave v where it is: it did last time, and nothing it reads has changed
+  // since — it reads the positions and geometry of v, its neighbours and theirs (their stars' corners).
+  bool knownIdle(int v) const {
+    const long idle = idleAt_[v];
+    if (idle < 0 || movedAt_[v] > idle) return false;
+    for (const int* u = nbBegin(v); u != nbEnd(v); ++u) {
+      if (movedAt_[*u] > idle) return false;
+      for (const int* w = nbBegin(*u); w != nbEnd(*u); ++w)
+        if (movedAt_[*w] > idle) return false;
+    }
+    return true;
+  }
+
+  // improveAt unless known idle; true when v's position changed.
   bool improve(int v) {
+    movedPosition_ = false;
+    if (knownIdle(v)) return false;
+    if (improveAt(v)) {
+      movedAt_[v] = ++clock_;
+      refresh(v);
+    } else {
+      idleAt_[v] = clock_;
+    }
+    return movedPosition_;
+  }
+
+  // Moves v to its best candidate; true when a candidate was taken (v's position or geometry changed).
+  bool improveAt(int v) {
     const Vec3 p0 = T_.V.row(v).transpose();
     const LocalGeometry g0 = geo_[v];
     const Vec2 uv0 = parametric_ ? t_.uv[v] : Vec2::Zero();
-    std::pair<int, double> best = localState(v);
+    std::pair<int, double> best = cachedLocalState(v);
     if (best.first == 0 && best.second == 0) return false;
     // Orientation of the triangles now, and the ring's size.
-    std::vector<int> signs;
+    signs_.clear();
     double ringEdge = 0, area = std::numeric_limits<double>::infinity();
     for (int f : rings_.triangles[v]) {
       const Vec3 a = T_.V.row(T_.F(f, 0)), b = T_.V.row(T_.F(f, 1)), c = T_.V.row(T_.F(f, 2));
       const double s = (b - a).cross(c - a).dot(g0.normal);
-      signs.push_back(s > 0 ? 1 : -1);
+      signs_.push_back(s > 0 ? 1 : -1);
       area = std::min(area, std::abs(s));
     }
     Vec3 centroid = Vec3::Zero();
-    for (int u : neighbours_[v]) {
-      centroid += T_.V.row(u).transpose();
-      ringEdge += (T_.V.row(u).transpose() - p0).norm();
+    const int valence = static_cast<int>(nbEnd(v) - nbBegin(v));
+    for (const int* u = nbBegin(v); u != nbEnd(v); ++u) {
+      centroid += T_.V.row(*u).transpose();
+      ringEdge += (T_.V.row(*u).transpose() - p0).norm();
     }
-    centroid /= static_cast<double>(neighbours_[v].size());
-    ringEdge /= static_cast<double>(neighbours_[v].size());
-    if (minArea_.size() != static_cast<std::size_t>(T_.V.rows())) minArea_.assign(T_.V.rows(), 0.0);
+    centroid /= static_cast<double>(valence);
+    ringEdge /= static_cast<double>(valence);
     minArea_[v] = area;
     const double cap = 0.4 * ringEdge;  // never further than this from where the laying put the vertex
     const double laidShortest = laidShortest_[v];  // nor shortening its edges much: no narrow layers made
+    // The neighbours' triangles with v as a corner: the only entries of their stars a candidate changes.
+    touched_.clear();
+    for (const int* u = nbBegin(v); u != nbEnd(v); ++u) {
+      if (!checkable_[*u]) continue;
+      const std::vector<int>& tris = rings_.triangles[*u];
+      for (int i = 0; i < static_cast<int>(tris.size()); ++i)
+        if (T_.F(tris[i], 0) == v || T_.F(tris[i], 1) == v || T_.F(tris[i], 2) == v) touched_.emplace_back(*u, i);
+    }
 
-    std::vector<Vec3> candidates;
+    std::array<Vec3, 27> candidates;
+    int nc = 0;
     const Vec3 toCentroid = centroid - p0;
-    for (double s : {1.0, 0.5, 0.25}) candidates.push_back(p0 + s * toCentroid);
+    for (double s : {1.0, 0.5, 0.25}) candidates[nc++] = p0 + s * toCentroid;
     for (double step : {0.15, 0.05, 0.3})
       for (int i = 0; i < 8; ++i) {
         const double angle = i * 3.141592653589793 / 4;
-        candidates.push_back(p0 + step * ringEdge * (std::cos(angle) * g0.d1 + std::sin(angle) * g0.d2));
+        candidates[nc++] = p0 + step * ringEdge * (std::cos(angle) * g0.d1 + std::sin(angle) * g0.d2);
       }
 
+    bool taken = false;
     Vec3 bestPoint = p0;
     LocalGeometry bestGeometry = g0;
     Vec2 bestUv = uv0;
+    const Vec3 origin = original_.row(v).transpose();
     for (const Vec3& c : candidates) {
-      if ((c - original_.row(v).transpose()).norm() > 1.5 * cap) continue;  // would land beyond the cap
+      if ((c - origin).norm() > 1.5 * cap) continue;  // would land beyond the cap
       Vec2 uv = uv0;
       LocalGeometry g;
       if (parametric_) {
@@ -210,23 +348,27 @@ class Repair {
       } else {
         g = surface_.closestPoint(c);
       }
-      if (!g.point.allFinite() || (g.point - original_.row(v).transpose()).norm() > cap) continue;
+      if (!g.point.allFinite() || (g.point - origin).norm() > cap) continue;
       T_.V.row(v) = g.point.transpose();
       geo_[v] = g;
-      if (foldsOver(v, signs) || shortestEdge(v) < 0.75 * laidShortest) continue;
-      const std::pair<int, double> s = localState(v);
-      if (s.first < best.first || (s.first == best.first && s.second < best.second * (1 - 1e-9) - 1e-15)) {
+      if (foldsOver(v) || shortestEdge(v) < 0.75 * laidShortest) continue;
+      std::pair<int, double> s;
+      if (candidateState(v, best, s)) {  // fewer invalid stars, or as many further from the edge of validity
         best = s;
         bestPoint = g.point;
         bestGeometry = g;
         bestUv = uv;
+        taken = true;
         if (s.first == 0 && s.second == 0) break;  // every star around is valid with its margins: done
       }
     }
     T_.V.row(v) = bestPoint.transpose();
     geo_[v] = bestGeometry;
     if (parametric_) t_.uv[v] = bestUv;
-    return bestPoint != p0;
+    // A taken candidate at the very same point would still change v's geometry: count it as a move here;
+    // what the caller reports as moved is the position.
+    movedPosition_ = bestPoint != p0;
+    return taken;
   }
 
   Triangulation& t_;
@@ -236,10 +378,18 @@ class Repair {
   VertexRings rings_;
   std::vector<LocalGeometry> geo_;
   std::vector<char> checkable_;
-  std::vector<std::vector<int>> neighbours_;
+  std::vector<int> neighbourStart_, neighbourList_;
   std::vector<double> minArea_;
   Points original_;
   std::vector<double> laidShortest_;  // each vertex's shortest edge as laid
+  std::vector<int> cacheStart_;
+  std::vector<TriangleState> cache_;
+  std::vector<long> movedAt_, idleAt_;  // clock_ of v's last move; of the last improve(v) that left it
+  long clock_ = 0;
+  // Scratch of improveAt.
+  std::vector<int> signs_;
+  std::vector<std::pair<int, int>> touched_;  // (neighbour, index in its star)
+  bool movedPosition_ = false;
 };
 
 }  // namespace

@@ -1,10 +1,12 @@
 #include <catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
 #include "phex/error.hpp"
 #include "phex/laying.hpp"
+#include "phex/mesh_surface.hpp"
 #include "phex/pipeline.hpp"
 #include "phex/surfaces.hpp"
 
@@ -49,6 +51,41 @@ TEST_CASE("repair: disturbed stars of a valid laying are made valid again, withi
   }
   CHECK(offSurface < 1e-9);              // still on the surface, uv in step
   CHECK(furthest < 0.5 * before.edgeMax);  // local moves only
+}
+
+TEST_CASE("repair: on an uploaded mesh, within the surface, counting as checkTriangulation does") {
+  // The repair judges candidates from per-triangle states it keeps up to date as vertices move; on a
+  // MeshSurface (closest points, no parameters) too, what it reports must be what a full check finds.
+  const ParametricSurfacePtr torus = makeSurface("torus");
+  const MeshSurface mesh(latticeTriangulation(*torus, cellForFaceCount(*torus, 4000)).mesh, "sampled torus");
+  LayingOptions o;
+  o.method = LayingMethod::Progressive;
+  o.cell = 0.05;
+  o.start = Vec3(0.87, 0, 0.38);
+  o.repairSweeps = 0;
+  Triangulation t = layTriangulation(mesh, o);
+  const Triangulation laid = t;
+  const int invalidLaid = static_cast<int>(checkTriangulation(t, mesh).invalidStars.size());
+  REQUIRE(invalidLaid > 5);
+  const RepairResult r = repairStars(t, mesh);
+  INFO("invalid " << r.invalidBefore << " -> " << r.invalidAfter << ", moved " << r.moved << " in " << r.sweeps);
+  CHECK(r.invalidBefore == invalidLaid);
+  // The repair keeps a moved vertex's geometry as the closest point of its candidate gave it; the check
+  // projects the moved point again, which on a mesh can land a hair away (another triangle, other
+  // interpolated curvature) and judge a star on the edge of validity the other way: 152 against 151 here.
+  const int invalidChecked = static_cast<int>(checkTriangulation(t, mesh).invalidStars.size());
+  CHECK(std::abs(r.invalidAfter - invalidChecked) <= 2);
+  CHECK(invalidChecked * 3 < invalidLaid);
+  CHECK(r.moved > 0);
+  CHECK(t.mesh.F == laid.mesh.F);
+  double offSurface = 0;  // moved within the surface
+  for (int v = 0; v < t.mesh.V.rows(); ++v)
+    offSurface = std::max(offSurface, (mesh.closestPoint(t.mesh.V.row(v).transpose()).point - t.mesh.V.row(v).transpose()).norm());
+  CHECK(offSurface < 1e-9);
+  Triangulation again = t;
+  const RepairResult r2 = repairStars(again, mesh);
+  CHECK(r2.invalidBefore == invalidChecked);
+  CHECK(r2.invalidAfter <= r2.invalidBefore);
 }
 
 TEST_CASE("repair: a valid triangulation is left alone") {
