@@ -628,6 +628,7 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
   const double wt = std::sqrt(tangential), ws = std::sqrt(shift);
   Eigen::VectorXd delta = Eigen::VectorXd::Zero(nf);
   std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(9 * static_cast<std::size_t>(nv) + nf);
   double distance = fit.before;
   constexpr int kRounds = 2;
   // Round 1 minimizes the sum of squared distances; the next ones reweight each vertex by its squared
@@ -638,9 +639,13 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
   double bestDistance = fit.before;
   for (int round = 0; round < kRounds; ++round) {
     checkCancel(cancel);
+    // The normal equations JᵀJ δ = −Jᵀr, assembled vertex by vertex: a vertex's three residuals (its
+    // weighted distance along n and its tangential drift) involve only the shifts of its own faces.
     triplets.clear();
-    Eigen::VectorXd r(3 * nv + nf);
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nf);
     for (int v = 0; v < nv; ++v) {
+      const int k0 = start[v], k = start[v + 1] - k0;
+      if (k == 0) continue;
       const Vec3 x = mesh.vertex(v);
       // The distance's own gradient: along the surface normal where the closest point is inside the
       // surface, towards the boundary curve where the vertex lies beyond it (boundary panels).
@@ -650,28 +655,29 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
       const Vec3 t1 = n.unitOrthogonal(), t2 = n.cross(t1);
       const Vec3 drift = x - x0.row(v).transpose();
       const double wv = std::sqrt(weight[v]);
-      r[3 * v] = wv * n.dot(away) / h;
-      r[3 * v + 1] = wt * t1.dot(drift) / h;
-      r[3 * v + 2] = wt * t2.dot(drift) / h;
-      for (int k = start[v]; k < start[v + 1]; ++k) {
-        triplets.emplace_back(3 * v, faces[k], wv * n.dot(G[k]));
-        triplets.emplace_back(3 * v + 1, faces[k], wt * t1.dot(G[k]));
-        triplets.emplace_back(3 * v + 2, faces[k], wt * t2.dot(G[k]));
+      const Vec3 residual(wv * n.dot(away) / h, wt * t1.dot(drift) / h, wt * t2.dot(drift) / h);
+      Vec3 column[3];
+      for (int i = 0; i < k && i < 3; ++i) {
+        const Vec3& g = G[k0 + i];
+        column[i] = Vec3(wv * n.dot(g), wt * t1.dot(g), wt * t2.dot(g));
+        rhs[faces[k0 + i]] -= column[i].dot(residual);
       }
+      for (int i = 0; i < k && i < 3; ++i)
+        for (int j = 0; j < k && j < 3; ++j) triplets.emplace_back(faces[k0 + i], faces[k0 + j], column[i].dot(column[j]));
     }
     for (int f = 0; f < nf; ++f) {
-      triplets.emplace_back(3 * nv + f, f, frozen[f] ? 1.0 : ws);
-      r[3 * nv + f] = ws * delta[f];
+      const double wf = frozen[f] ? 1.0 : ws;
+      triplets.emplace_back(f, f, wf * wf);
+      rhs[f] -= wf * ws * delta[f];
     }
-    Eigen::SparseMatrix<double> J(3 * nv + nf, nf);
-    J.setFromTriplets(triplets.begin(), triplets.end());
-    const Eigen::SparseMatrix<double> JtJ = J.transpose() * J;
+    Eigen::SparseMatrix<double> JtJ(nf, nf);
+    JtJ.setFromTriplets(triplets.begin(), triplets.end());
     Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg(JtJ);
     // Tight enough that where the iterations stop (which round-off can shift by one between native code
     // and WebAssembly) moves no vertex by more than round-off.
     cg.setTolerance(1e-6);
     cg.setMaxIterations(300);
-    Eigen::VectorXd step = cg.solve(-(J.transpose() * r));
+    Eigen::VectorXd step = cg.solve(rhs);
     if (!step.allFinite()) break;
     for (int f = 0; f < nf; ++f)
       if (frozen[f]) step[f] = 0;
