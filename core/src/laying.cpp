@@ -22,6 +22,7 @@ constexpr double kEquilateralRatio = 0.5 * kSqrt3;  // |CM| / |AB| of an equilat
 constexpr double kMinConjugateSine = 0.15;
 constexpr double kNearParabolic = 0.1;  // kmin / kmax below which a point counts as near a parabolic curve
 constexpr double kResampleBelow = 0.55, kResampleAbove = 1.8;  // row spacing / cell that triggers a resample
+constexpr double kResampleLimit = 2.5;  // ... even at a parabolic curve
 constexpr double kValidMargin = 1.1;  // Method 2 keeps the apexes this far above DE (in units of validStep)
 constexpr double kZipGap = 1.6;       // fronts facing each other closer than this many steps are zipped
 constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
@@ -848,7 +849,15 @@ void Laying::layLayer(std::size_t f) {
     for (int k = 0; k <= (closedRun ? length - 1 : length); ++k) below.push_back(A.ids[(first + k) % count]);
 
     const bool curveUsable = C.curveLength > 0 || o_.method == LayingMethod::Progressive;
-    if (curveUsable && (spacing < kResampleBelow * o_.cell || spacing > kResampleAbove * o_.cell)) {
+    // Not on a row at a parabolic curve: the pentagons and heptagons a resample leaves where the counts
+    // change would sit where the Dupin dual is least stable; the next rows past the curve take it.
+    int parabolic = 0;
+    for (const Apex& a : run) {
+      const double kmax = std::max(std::abs(a.p.g.k1), std::abs(a.p.g.k2));
+      parabolic += kmax > 0 && std::min(std::abs(a.p.g.k1), std::abs(a.p.g.k2)) < kNearParabolic * kmax;
+    }
+    const bool atParabolic = 5 * parabolic > length && spacing < kResampleLimit * o_.cell;
+    if (curveUsable && !atParabolic && (spacing < kResampleBelow * o_.cell || spacing > kResampleAbove * o_.cell)) {
       // The row's spacing drifted far from the cell: re-sample it evenly along its curve, zip it to the base.
       double ratio = 0;
       for (const Apex& a : run) ratio += a.ratio / length;
