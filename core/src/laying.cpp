@@ -26,8 +26,8 @@ constexpr double kResampleLimit = 2.5;  // ... even at a parabolic curve
 constexpr double kValidMargin = 1.1;  // Method 2 keeps the apexes this far above DE (in units of validStep)
 constexpr double kZipGap = 1.6;       // fronts facing each other closer than this many steps are zipped
 constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
-constexpr double kEllFirst = 1.5;
-constexpr int kParabolicSamples = 400;  // samples of the surface that vote for the family along parabolic curves     // ... at first only this many: further where no crossing is found
+constexpr double kEllFirst = 1.5;     // ... at first only this many: further where no crossing is found
+constexpr int kParabolicSamples = 400;  // samples of the surface that vote for the family along parabolic curves
 
 const char* const kAsymptoticBase =
     "the base curve runs (almost) along an asymptotic direction, which is self-conjugate (§4.2, Prop. 5), so no "

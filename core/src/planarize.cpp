@@ -140,6 +140,29 @@ class RoundCallback final : public ceres::IterationCallback {
 };
 
 
+// The faces at each vertex as one flat array: those of vertex v are faces[start[v] .. start[v + 1]), in
+// increasing order; only the faces `keep` accepts.
+struct FacesAtVertices {
+  std::vector<int> start, faces;
+};
+
+template <class Keep>
+FacesAtVertices facesAtVertices(const PolyMesh& mesh, Keep keep) {
+  const int nv = static_cast<int>(mesh.V.rows()), nf = mesh.faceCount();
+  FacesAtVertices a;
+  a.start.assign(nv + 1, 0);
+  for (int f = 0; f < nf; ++f)
+    if (keep(f))
+      for (int i = 0; i < mesh.faceSize(f); ++i) ++a.start[mesh.face(f)[i] + 1];
+  for (int v = 0; v < nv; ++v) a.start[v + 1] += a.start[v];
+  a.faces.resize(a.start[nv]);
+  std::vector<int> fill(a.start.begin(), a.start.end() - 1);
+  for (int f = 0; f < nf; ++f)
+    if (keep(f))
+      for (int i = 0; i < mesh.faceSize(f); ++i) a.faces[fill[mesh.face(f)[i]]++] = f;
+  return a;
+}
+
 // The least-squares plane of `face` (normal n, offset d = n·centroid) by power iteration on the adjugate
 // of the face's covariance matrix: its dominant eigenvector is the covariance's smallest one, and each
 // step shrinks the other components by λ1/λ2 (about the squared planarity, so a few steps reach
@@ -205,27 +228,18 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
   std::vector<double> faceScale(nf, 0.0);  // 1 / h_f^2
   std::vector<Vec3> normal(nf);
   std::vector<double> offset(nf);
-  // The faces at each vertex, as one flat array (offsets vertexStart, #V + 1 entries).
-  std::vector<int> vertexStart(nv + 1, 0), vertexFaces;
   for (int f = 0; f < nf; ++f) {
     const int n = mesh.faceSize(f);
     if (n < 4) continue;
     double hf = 0;
-    for (int i = 0; i < n; ++i) {
-      hf += (mesh.vertex(mesh.face(f)[i]) - mesh.vertex(mesh.face(f)[(i + 1) % n])).norm();
-      ++vertexStart[mesh.face(f)[i] + 1];
-    }
+    for (int i = 0; i < n; ++i) hf += (mesh.vertex(mesh.face(f)[i]) - mesh.vertex(mesh.face(f)[(i + 1) % n])).norm();
     hf /= n;
     faceScale[f] = 1.0 / (hf * hf);
   }
-  for (int v = 0; v < nv; ++v) vertexStart[v + 1] += vertexStart[v];
-  vertexFaces.resize(vertexStart[nv]);
-  {
-    std::vector<int> fill(vertexStart.begin(), vertexStart.end() - 1);
-    for (int f = 0; f < nf; ++f)
-      if (faceScale[f] > 0)
-        for (int i = 0; i < mesh.faceSize(f); ++i) vertexFaces[fill[mesh.face(f)[i]]++] = f;
-  }
+  // The faces at each vertex (triangles are planar already and left out).
+  const FacesAtVertices at = facesAtVertices(mesh, [&](int f) { return faceScale[f] > 0; });
+  const std::vector<int>& vertexStart = at.start;
+  const std::vector<int>& vertexFaces = at.faces;
   // Fits the planes and returns the planarity max (largest |n·x − d| / h_f, which for least-squares
   // planes is the facePlanarity measure). refinePlane costs a fraction of the 3x3 eigensolver, which
   // dominated the solver's time; the plane step still never raises the energy.
@@ -548,16 +562,9 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
   if (nv == 0 || nf == 0 || !(h > 0)) return fit;
   std::vector<Vec3> normal(nf);
   for (int f = 0; f < nf; ++f) normal[f] = leastSquaresPlane(mesh, f).normal;
-  std::vector<int> start(nv + 1, 0), faces;
-  for (int f = 0; f < nf; ++f)
-    for (int i = 0; i < mesh.faceSize(f); ++i) ++start[mesh.face(f)[i] + 1];
-  for (int v = 0; v < nv; ++v) start[v + 1] += start[v];
-  faces.resize(start[nv]);
-  {
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (int f = 0; f < nf; ++f)
-      for (int i = 0; i < mesh.faceSize(f); ++i) faces[fill[mesh.face(f)[i]]++] = f;
-  }
+  const FacesAtVertices at = facesAtVertices(mesh, [](int) { return true; });
+  const std::vector<int>& start = at.start;
+  const std::vector<int>& faces = at.faces;
   // G_v, column k for the k-th face at v (3 x #faces(v), stored column after column).
   std::vector<Vec3> G(faces.size(), Vec3::Zero());
   std::vector<char> frozen(nf, 0);
