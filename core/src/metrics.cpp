@@ -126,6 +126,23 @@ bool faceSelfIntersects(const PolyMesh& mesh, int face, const Vec3& normal) {
   return polygonSelfIntersects(planarCorners(mesh, face, FacePlane{Vec3::Zero(), normal}));
 }
 
+double faceFoldMargin(const PolyMesh& mesh, int face, const Vec3& normal) {
+  const std::vector<Vec2> p = planarCorners(mesh, face, FacePlane{Vec3::Zero(), normal});
+  if (polygonSelfIntersects(p)) return 0.0;
+  const int n = static_cast<int>(p.size());
+  double margin = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < n; ++j) {
+    const Vec2 a = p[j], ab = p[(j + 1) % n] - a;
+    const double length2 = ab.squaredNorm();
+    for (int i = 0; i < n; ++i) {
+      if (i == j || i == (j + 1) % n) continue;
+      const double t = length2 > 0 ? std::clamp((p[i] - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
+      margin = std::min(margin, (p[i] - a - t * ab).norm());
+    }
+  }
+  return margin;
+}
+
 double facePlanarityDiagonals(const PolyMesh& mesh, int face) {
   const int n = mesh.faceSize(face);
   if (n < 4) return 0.0;

@@ -246,6 +246,11 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
   double energy = 0;  // the objective after the last plane fit (without the μ term)
   bool warm = false;  // the planes of the previous fit are there to start from
   std::vector<double> faceWorst(nf, 0.0), faceEnergy(nf, 0.0);  // per face: max |r| / h_f, Σ r² / h_f²
+  // Per face, a lower bound on how far its corners may still move before it can cross itself (faceFoldMargin
+  // less the steps taken since): -1 where unknown (its plane moved since), 0 where it is not simple. Steps
+  // within the bound need no check, so every step is guarded at the cost of about one check per face and
+  // sweep; small steps were not guarded before, and a few hundred of them could fold a face unnoticed.
+  std::vector<double> foldMargin(nf, -1.0);
   auto fitFace = [&](int f) {
     const int n = mesh.faceSize(f);
     const int* ids = mesh.face(f);
@@ -255,6 +260,7 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
       offset[f] = fp.normal.dot(fp.centroid);
     }
     faceWorst[f] = faceEnergy[f] = 0;
+    foldMargin[f] = -1;
     for (int i = 0; i < n; ++i) {
       const double r = (normal[f].dot(mesh.vertex(ids[i])) - offset[f]) * std::sqrt(faceScale[f]);
       faceWorst[f] = std::max(faceWorst[f], std::abs(r));
@@ -308,14 +314,18 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
     // dependent (next to a parabolic curve) their intersection runs off along the free direction and
     // drags the vertex across its face. The step is then shortened (halved up to four times, else not
     // taken); a shortened step of a convex quadratic still lowers the energy.
-    if (options.preventFolds && dx.norm() > 1e-3 * h) {
-      int simple[16], count = 0;
-      for (int k = vertexStart[v]; k < vertexStart[v + 1] && count < 16; ++k)
-        if (faceIsSimple(vertexFaces[k])) simple[count++] = vertexFaces[k];
+    if (options.preventFolds) {
+      const double step = dx.norm();
+      int near[16], count = 0;  // the simple faces at v that a step this long could fold
+      for (int k = vertexStart[v]; k < vertexStart[v + 1] && count < 16; ++k) {
+        const int f = vertexFaces[k];
+        if (foldMargin[f] < 0) foldMargin[f] = faceFoldMargin(mesh, f, normal[f]);
+        if (foldMargin[f] > 0 && foldMargin[f] <= step) near[count++] = f;
+      }
       for (int attempt = 0; count > 0; ++attempt) {
         mesh.V.row(v) = (xv + dx).transpose();
         bool folds = false;
-        for (int i = 0; i < count && !folds; ++i) folds = !faceIsSimple(simple[i]);
+        for (int i = 0; i < count && !folds; ++i) folds = !faceIsSimple(near[i]);
         if (!folds) break;
         if (attempt == 4) {
           dx.setZero();
@@ -323,6 +333,11 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
           break;
         }
         dx *= 0.5;
+      }
+      const double taken = dx.norm();
+      for (int k = vertexStart[v]; k < vertexStart[v + 1]; ++k) {
+        double& m = foldMargin[vertexFaces[k]];
+        if (m > 0) m = m > taken ? m - taken : -1.0;  // checked ones (or used up): measured again when needed
       }
     }
     mesh.V.row(v) = (xv + dx).transpose();

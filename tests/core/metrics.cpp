@@ -1,5 +1,6 @@
 #include <catch.hpp>
 #include <cmath>
+#include <random>
 
 #include "phex/metrics.hpp"
 
@@ -34,6 +35,34 @@ TEST_CASE("metrics: self-intersection is detected") {
   const MeshMetrics mm = measure(hexagon(0, true));
   CHECK(mm.selfIntersectingCount == 1);
   CHECK(mm.facesBySize.at(6) == 1);
+}
+
+TEST_CASE("metrics: the fold margin bounds how far one corner may move before the face crosses itself") {
+  // Regular hexagon of edge 1: the edges nearest a corner not at it start at its neighbours, one edge away.
+  CHECK(faceFoldMargin(hexagon(0, false), 0, Vec3::UnitZ()) == Approx(1.0));
+  CHECK(faceFoldMargin(hexagon(0, true), 0, Vec3::UnitZ()) == 0.0);
+  // Random hexagons and random moves of one corner: a move shorter than the margin never folds the face.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int checked = 0, folded = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    PolyMesh m = hexagon(0, false);
+    for (int i = 0; i < 6; ++i) m.V.row(i) += 0.4 * Eigen::RowVector3d(u(rng), u(rng), 0);
+    const double margin = faceFoldMargin(m, 0, Vec3::UnitZ());
+    if (margin == 0) continue;
+    const int corner = trial % 6;
+    const Vec3 d = Vec3(u(rng), u(rng), 0).normalized();
+    const double length = std::abs(u(rng)) * 1.5 * margin;
+    m.V.row(corner) += (length * d).transpose();
+    const bool folds = faceSelfIntersects(m, 0, Vec3::UnitZ());
+    if (length < margin) {
+      ++checked;
+      CHECK_FALSE(folds);
+    }
+    folded += folds;
+  }
+  CHECK(checked > 5000);
+  CHECK(folded > 0);  // the longer moves do fold some: the bound is not vacuous
 }
 
 TEST_CASE("metrics: affine regularity against the regular and quasi-regular templates (§4.2)") {
