@@ -44,7 +44,11 @@ export const PRESETS = {
   'Fig. 21 convex mesh by Loop subdivision': {
     params: { surface: 'egg', faces: 1000, method: 'subdivision' },
   },
-  'Fig. 22 free-form, pre-specified': {
+  'Fig. 22 free-form roof: hexagons, bricks at the parabolic curve, bow-ties': {
+    params: { surface: 'wave-roof', faces: 4000, method: 'prespecified', field: 'principal' },
+    view: { color: 'convexity' },
+  },
+  'Two round bumps (umbilics: beyond the method, partly covered)': {
     params: { surface: 'freeform', faces: 2500, method: 'prespecified', field: 'principal' },
   },
 };

@@ -107,6 +107,10 @@ TriangleFrame frameOf(const std::vector<LocalGeometry>& geo, const TriMesh& T, i
   return fr;
 }
 
+// Singular values of the three tangent planes' normals below this fraction of the largest are left free
+// (the point stays at the centroid's coordinate there) in a triangle across a parabolic curve.
+constexpr double kStraddlingPlanes = 0.1;
+
 // A dual vertex must stay near its triangle: a far one means an ill-posed construction (§6 fallback).
 bool plausible(const Vec3& x, const TriangleFrame& fr) {
   return x.allFinite() && (x - fr.centroid).norm() <= 0.75 * fr.longestEdge;
@@ -115,17 +119,19 @@ bool plausible(const Vec3& x, const TriangleFrame& fr) {
 // The point nearest to `start` that lies on all the given tangent planes, as far as they determine it: a
 // minimum-norm least-squares correction, so directions the planes leave free (a developable's ruling, two
 // nearly parallel planes) keep `start`'s coordinate instead of running off.
-// Up to three planes: unused rows of `normals` are zero.
-Vec3 nearestOnPlanes(const Eigen::Matrix3d& normals, const Vec3& offsets, const Vec3& start) {
+// Up to three planes: unused rows of `normals` are zero. Singular values below `threshold` times the largest
+// count as zero.
+Vec3 nearestOnPlanes(const Eigen::Matrix3d& normals, const Vec3& offsets, const Vec3& start, double threshold = 1e-9) {
   Eigen::JacobiSVD<Eigen::Matrix3d> svd(normals, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  svd.setThreshold(1e-9);
+  svd.setThreshold(threshold);
   return start + svd.solve(offsets - normals * start);
 }
 
 // §4.1: the three tangent planes at the triangle's corners meet in one point. Where they leave a direction
 // free (a developable's ruling) the point nearest the centroid is taken; false where they are nearly parallel
 // and the point runs off (then §6's fallback applies, and x is left as it was).
-bool tangentPoint(const std::vector<LocalGeometry>& geo, const TriMesh& T, int f, const TriangleFrame& fr, Vec3& x) {
+bool tangentPoint(const std::vector<LocalGeometry>& geo, const TriMesh& T, int f, const TriangleFrame& fr, Vec3& x,
+                  double threshold = 1e-9) {
   Eigen::Matrix3d A;
   Vec3 b;
   for (int c = 0; c < 3; ++c) {
@@ -133,7 +139,7 @@ bool tangentPoint(const std::vector<LocalGeometry>& geo, const TriMesh& T, int f
     A.row(c) = g.normal.transpose();
     b(c) = g.normal.dot(g.point);
   }
-  const Vec3 y = nearestOnPlanes(A, b, fr.centroid);
+  const Vec3 y = nearestOnPlanes(A, b, fr.centroid, threshold);
   if (!plausible(y, fr)) return false;
   x = y;
   return true;
@@ -259,11 +265,18 @@ DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
     const LocalGeometry* g[3] = {&geo[T.F(f, 0)], &geo[T.F(f, 1)], &geo[T.F(f, 2)]};
     // §6 step 1: parabolic region detection, made scale-free with the triangle size.
     const double h2 = fr.longestEdge * fr.longestEdge;
-    bool parabolic = false;
+    bool parabolic = false, straddles = false;
+    const double K0 = g[0]->gaussianCurvature();
     for (int c = 0; c < 3; ++c) {
       const double K = g[c]->gaussianCurvature();
-      parabolic |= std::abs(K) * h2 < 1e-8 || (K > 0) != (g[0]->gaussianCurvature() > 0);
+      parabolic |= std::abs(K) * h2 < 1e-8 || (K > 0) != (K0 > 0);
+      straddles |= (K > 0) != (K0 > 0) && std::max(std::abs(K), std::abs(K0)) * h2 >= 1e-8;
     }
+    // A triangle across a parabolic curve: its tangent planes nearly share the zero-curvature direction, so
+    // where they meet is ill-determined along it. The point nearest the centroid along that direction (and on
+    // the planes in the others) keeps the face there a brick with its long sides along it (see the laying's
+    // base family); the far intersection or the bare centroid, mixed between neighbours, folded them.
+    if (straddles) return tangentPoint(geo, T, f, fr, x, kStraddlingPlanes);
     if (!parabolic) {
       // §6 steps 2-3: one conic centre per vertex, averaged. The conic of vertex c passes through c itself
       // and the vertical projections of the other two.

@@ -27,7 +27,7 @@ constexpr double kValidMargin = 1.1;  // Method 2 keeps the apexes this far abov
 constexpr double kZipGap = 1.6;       // fronts facing each other closer than this many steps are zipped
 constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
 constexpr double kEllFirst = 1.5;     // ... at first only this many: further where no crossing is found
-constexpr int kParabolicSamples = 400;  // samples of the surface that vote for the family along parabolic curves
+constexpr int kParabolicSamples = 400;  // samples of the surface that vote for the base family at parabolic curves
 
 const char* const kAsymptoticBase =
     "the base curve runs (almost) along an asymptotic direction, which is self-conjugate (§4.2, Prop. 5), so no "
@@ -979,28 +979,26 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
   return t;
 }
 
-// §5.3 and §7: where a surface has parabolic curves, the network should contain them, so that the layers
-// cross them row by row instead of every row crossing them (a torus laid along its meridians has no valid
-// laying, Fig. 19; rows along the parallels cross the parabolic circles one layer at a time). The family
-// the rows should follow is the one more nearly tangent to the parabolic curves — the tangent there is
-// normal to the gradient of K, estimated by central differences — decided by a vote over the surface's
-// near-parabolic samples when it is clear (two thirds, from at least three samples). nullopt on surfaces
-// without parabolic points.
-std::optional<Family> familyAlongParabolicCurves(const SurfaceWalker& walker, const DirectionField& field) {
-  const Surface& surface = walker.surface();
-  const double h = 1e-3 * surface.bounds().diagonal().norm();
+// §5.3, §3: at a parabolic point the Dupin indicatrix degenerates into two parallel lines along the
+// zero-curvature direction, and a planar face there is inscribed in them: a "brick" with two sides along
+// that direction (the quad-shaped hexagons of a developable). Bricks stack in courses along it, and the
+// courses are the duals of the triangulation's rows, so the rows should follow the zero-curvature direction
+// where they meet a parabolic curve. On a torus that direction runs along the parabolic circles (the
+// parallels: laid along its meridians a torus has no valid laying, Fig. 19); on a vase or a wave-shaped roof
+// it crosses the parabolic curve, and so do the rows, turning hexagons into bricks and bricks into the
+// bow-ties of the hyperbolic side. The family whose direction is nearer the zero-curvature one at the
+// surface's near-parabolic samples wins when the vote is clear (two thirds, from at least three samples).
+// nullopt on surfaces without parabolic points.
+std::optional<Family> familyAlongZeroCurvature(const SurfaceWalker& walker, const DirectionField& field) {
   int first = 0, conjugate = 0;
-  for (const LocalGeometry& g : surface.samples(kParabolicSamples)) {
+  for (const LocalGeometry& g : walker.surface().samples(kParabolicSamples)) {
     const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
     if (!(kmax > 0) || std::abs(g.k1 * g.k2) > kNearParabolic * kmax * kmax) continue;
-    auto K = [&](const Vec3& d) { return surface.closestPoint(g.point + h * d).gaussianCurvature(); };
-    const Vec3 gradient = (K(g.d1) - K(-g.d1)) * g.d1 + (K(g.d2) - K(-g.d2)) * g.d2;
-    if (!(gradient.norm() > 0)) continue;
-    const Vec3 tangent = g.normal.cross(gradient).normalized();
+    const Vec3 zero = std::abs(g.k1) <= std::abs(g.k2) ? g.d1 : g.d2;
     const SurfacePoint p = walker.project(g.point);
     const std::optional<Vec3> dF = field.direction(p, Family::First), dG = field.direction(p, Family::Conjugate);
     if (!dF || !dG) continue;
-    (std::abs(dF->dot(tangent)) >= std::abs(dG->dot(tangent)) ? first : conjugate) += 1;
+    (std::abs(dF->dot(zero)) >= std::abs(dG->dot(zero)) ? first : conjugate) += 1;
   }
   if (first + conjugate < 3) return std::nullopt;
   if (3 * first >= 2 * (first + conjugate)) return Family::First;
@@ -1013,6 +1011,16 @@ std::optional<Family> familyAlongParabolicCurves(const SurfaceWalker& walker, co
 double stepLowerBound(double r, double b) {
   if (!(b > 0) || r >= 2 * b) return r;
   return b + r * r / (4 * b);
+}
+
+BaseFamily parabolicBaseFamily(const Surface& surface, const LayingOptions& options) {
+  if (!(options.cell > 0) || !std::isfinite(options.cell))
+    throw Error(ErrorCode::InvalidParameter, "laying option cell must be > 0");
+  const SurfaceWalker walker(surface, options.cell);
+  const DirectionField field(walker, parseFieldSpec(options.field));
+  const std::optional<Family> family = familyAlongZeroCurvature(walker, field);
+  if (!family) return BaseFamily::Auto;
+  return *family == Family::First ? BaseFamily::First : BaseFamily::Conjugate;
 }
 
 LayingMethod parseLayingMethod(const std::string& name) {
@@ -1068,8 +1076,8 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
   } else if (options.baseDirection) {
     family = std::abs(dF->dot(hint)) >= std::abs(dG->dot(hint)) ? Family::First : Family::Conjugate;
   } else if (options.base == BaseFamily::Auto) {
-    const std::optional<Family> alongParabolic = familyAlongParabolicCurves(walker, field);
-    family = alongParabolic ? *alongParabolic
+    const std::optional<Family> alongZero = familyAlongZeroCurvature(walker, field);
+    family = alongZero ? *alongZero
                             : normalCurvature(*dF) <= normalCurvature(*dG) ? Family::First : Family::Conjugate;
   } else {
     family = options.base == BaseFamily::First ? Family::First : Family::Conjugate;

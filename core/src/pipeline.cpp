@@ -153,56 +153,96 @@ TriangulationMethod resolveMethod(const PipelineParams& params) {
 
 namespace {
 
-// Where L0 should start when the caller did not say. The middle of the bounds, projected, suits a patch;
-// on a ring (torus, cyclide, their meshes) it lands on the inner side, where rows along the parallels
-// must be resampled as they grow and cross the parabolic circles badly. So a few candidates — that point,
-// and the most elliptic and the most hyperbolic of some 150 samples of the surface — are laid at a
-// half the size (at most 1000 faces), and the one whose triangulation covers most of the surface
-// with the fewest invalid stars and self-intersecting faces of its Dupin dual wins.
-// `trialCell` and `trialVertices` receive the winning trial lay's cell and vertex count (else stay 0).
-std::optional<Vec3> chooseStart(const Surface& surface, const LayingOptions& options, int faces,
-                                const CancelFlag* cancel, std::string& note, double& trialCell, double& trialVertices) {
+// Where L0 should start, and along which family, when the caller did not say. The middle of the bounds,
+// projected, suits a patch; on a ring (torus, cyclide, their meshes) it lands on the inner side, where rows
+// along the parallels must be resampled as they grow and cross the parabolic circles badly. So a few
+// candidates — that point, and the most elliptic and the most hyperbolic of some 150 samples of the surface —
+// are laid at a half the size (at most 1000 faces), and the one whose triangulation covers most of the
+// surface with the fewest invalid stars and self-intersecting faces of its Dupin dual wins.
+// On a surface with parabolic curves the rows follow the zero-curvature direction there (BaseFamily::Auto);
+// where that network cannot cover the surface (round bumps, whose parabolic rings no singularity-free
+// network contains) the other family is laid from the same candidates and kept if it scores better.
+constexpr double kPoorTrial = 0.8;  // a trial score (coverage minus 5x the bad share) below which more is tried
+
+struct StartChoice {
+  std::optional<Vec3> start;        // nullopt: the default start (nothing to choose between)
+  BaseFamily base = BaseFamily::Auto;
+  double trialCell = 0, trialVertices = 0;  // the winning trial lay's cell and vertex count (else 0)
+  std::string note;
+};
+
+StartChoice chooseStart(const Surface& surface, const LayingOptions& options, int faces, const CancelFlag* cancel) {
+  StartChoice choice;
+  LayingOptions trial = options;
+  const bool pickFamily = options.base == BaseFamily::Auto && !options.baseDirection;
+  if (pickFamily) trial.base = choice.base = parabolicBaseFamily(surface, options);
   const std::vector<LocalGeometry> samples = surface.samples(150);  // a 12 x 12 grid on a parametric surface
-  if (samples.empty()) return std::nullopt;
+  if (samples.empty()) return choice;
   std::vector<Vec3> candidates = {surface.bounds().center()};
   const auto byK = [](const LocalGeometry& a, const LocalGeometry& b) { return a.gaussianCurvature() < b.gaussianCurvature(); };
   const LocalGeometry& most = *std::max_element(samples.begin(), samples.end(), byK);
   const LocalGeometry& least = *std::min_element(samples.begin(), samples.end(), byK);
   if (most.gaussianCurvature() > 0) candidates.push_back(most.point);
   if (least.gaussianCurvature() < 0) candidates.push_back(least.point);
-  LayingOptions trial = options;
   const int trialFaces = std::clamp(faces / 2, 50, 1000);
   trial.cell = options.cell * std::sqrt(double(faces) / trialFaces);
   double bestScore = -std::numeric_limits<double>::infinity();
   std::optional<Vec3> best;
   double bestVertices = 0;
   int laid = 0;
-  for (const Vec3& c : candidates) {
-    trial.start = c;
+  // The score of a trial lay, or nullopt where it cannot be laid.
+  auto score = [&]() -> std::optional<std::pair<double, double>> {
     Triangulation t;
     try {
       t = layTriangulation(surface, trial, {}, cancel);
     } catch (const Error& e) {
       if (e.code() == ErrorCode::Cancelled) throw;
-      continue;  // this start cannot be laid from; the others may
+      return std::nullopt;  // this start cannot be laid from; the others may
     }
-    ++laid;
     const TriangulationCheck check = checkTriangulation(t, surface);
     const int folded = measure(dupinDual(t, surface).mesh).selfIntersectingCount;
     const double bad = double(check.invalidStars.size() + folded) / std::max<Eigen::Index>(t.mesh.V.rows(), 1);
+    return std::make_pair((check.coverage >= 0 ? check.coverage : 1.0) - 5 * bad, double(t.mesh.V.rows()));
+  };
+  for (const Vec3& c : candidates) {
+    trial.start = c;
+    const auto s = score();
+    if (!s) continue;
+    ++laid;
     // The middle of the bounds (the first candidate) keeps the start unless another is clearly better: at a
     // quarter of the size small differences are noise.
-    const double score = (check.coverage >= 0 ? check.coverage : 1.0) - 5 * bad - (laid > 1 ? 0.05 : 0.0);
-    if (score > bestScore) bestScore = score, best = c, bestVertices = double(t.mesh.V.rows());
+    const double value = s->first - (laid > 1 ? 0.05 : 0.0);
+    if (value > bestScore) bestScore = value, best = c, bestVertices = s->second;
   }
-  if (laid < 2 || !best) return std::nullopt;  // nothing to choose between: the default start
-  trialCell = trial.cell;
-  trialVertices = bestVertices;
+  // Only when the family along the zero-curvature direction leaves much of the surface uncovered or invalid
+  // (a score below kPoorTrial) is the other family tried, from every candidate: on surfaces whose network
+  // contains the parabolic curves it costs no lay.
+  bool otherFamily = false;
+  if (bestScore < kPoorTrial && (choice.base == BaseFamily::First || choice.base == BaseFamily::Conjugate)) {
+    trial.base = choice.base == BaseFamily::First ? BaseFamily::Conjugate : BaseFamily::First;
+    for (const Vec3& c : candidates) {
+      trial.start = c;
+      const auto s = score();
+      if (!s) continue;
+      ++laid;
+      // Both are poor here, so no bias: the better trial wins (the middle of the bounds keeps its edge).
+      const double value = s->first - (c == candidates.front() ? 0.0 : 0.05);
+      if (value > bestScore) bestScore = value, best = c, bestVertices = s->second, otherFamily = true;
+    }
+  }
+  if (otherFamily) choice.base = trial.base;
+  if ((laid < 2 && !otherFamily) || !best) return choice;  // nothing to choose between: the default start
+  choice.start = best;
+  choice.trialCell = trial.cell;
+  choice.trialVertices = bestVertices;
   std::ostringstream s;
   s << "start chosen among " << laid << " candidates by trial lays at about " << trialFaces << " faces: near ("
     << best->x() << ", " << best->y() << ", " << best->z() << ")";
-  note = s.str();
-  return best;
+  if (otherFamily)
+    s << "; rows along the family across the zero-curvature direction, which covered more than the family along "
+         "it (no singularity-free network contains these parabolic curves)";
+  choice.note = s.str();
+  return choice;
 }
 
 }  // namespace
@@ -253,9 +293,14 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       lo.lowerBound = params.lowerBound;
       lo.start = params.start;
       lo.baseDirection = params.direction;
-      std::string startNote;
-      double trialCell = 0, trialVertices = 0;
-      if (!lo.start) lo.start = chooseStart(*t.surface, lo, params.faces, cancel, startNote, trialCell, trialVertices);
+      StartChoice choice;
+      if (!lo.start) {
+        choice = chooseStart(*t.surface, lo, params.faces, cancel);
+        lo.start = choice.start;
+        lo.base = choice.base;
+      }
+      const std::string& startNote = choice.note;
+      const double trialCell = choice.trialCell, trialVertices = choice.trialVertices;
       // The trial lay from the chosen start already measured how far the vertex count falls short of the area
       // estimate (layers stopping short leave parts uncovered): when by more than 10 %, start from the cell it
       // predicts, and the secant below takes it as its first point, which saves a lay. (A trial with more

@@ -348,6 +348,33 @@ const std::vector<Entry>& registry() {
                          b1.zyy + b2.zyy - kd};
          });
        }},
+      {{"wave-roof",
+        "Free-form roof (Figure 22 kind): a barrel vault across y carrying a wave along x whose crests bend with y; "
+        "elliptic on one side of a curved parabolic curve, hyperbolic on the other, and free of umbilics, so its "
+        "curvature lines form one regular net (the premise of the paper's Section 5.2).",
+        {{"size", 3.0, 1e-6, 1e6, "side of the square"},
+         {"radius", 2.0, 1e-6, 1e6, "radius of the barrel vault across y, more than half the side"},
+         {"amplitude", 0.15, 0.0, 1e6, "amplitude of the wave along x"},
+         {"wavenumber", 1.5, 0.0, 1e6, "wavenumber of the wave along x (radians per unit length)"},
+         {"bend", 0.3, -1e6, 1e6, "bending of the wave crests: phase added per squared unit of y"}}},
+       [](const SurfaceParams& p) {
+         const double L = p.at("size"), R = p.at("radius"), A = p.at("amplitude"), w = p.at("wavenumber"),
+                      b = p.at("bend");
+         if (!(R > 0.5 * L))
+           throw Error(ErrorCode::InvalidParameter, "wave-roof: radius must be more than half the side (got radius=" +
+                                                        str(R) + ", size=" + str(L) + ")");
+         return heightField("wave-roof", L, [R, A, w, b](double x, double y) {
+           const double q = R * R - y * y, sq = std::sqrt(q);
+           const double u = w * x + b * y * y, su = std::sin(u), cu = std::cos(u);
+           const double uy = 2 * b * y;
+           return Height{R - sq + A * su,
+                         A * w * cu,
+                         y / sq + A * cu * uy,
+                         -A * w * w * su,
+                         -A * su * w * uy,
+                         R * R / (q * sq) + A * (-su * uy * uy + cu * 2 * b)};
+         });
+       }},
   };
   return entries;
 }
@@ -374,6 +401,7 @@ const std::vector<SurfaceSpec>& analyticSurfaces() {
       {"elliptic-paraboloid", {"prespecified", "param"}},
       {"hyperbolic-paraboloid", {"prespecified", "principal"}},
       {"freeform", {"prespecified", "principal"}},
+      {"wave-roof", {"prespecified", "principal"}},
       {"enneper", {"lattice", "principal"}},
       {"catenoid", {"prespecified", "principal"}},
       {"helicoid", {"prespecified", "principal"}},

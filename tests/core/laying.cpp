@@ -298,7 +298,19 @@ TEST_CASE("laying: minimal surfaces along their curvature lines (Fig. 21 left)")
   }
 }
 
-TEST_CASE("laying: free-form surface with parabolic curves (Fig. 22)") {
+TEST_CASE("laying: free-form roof with a parabolic curve along its curvature lines (Fig. 22)") {
+  // The wave roof's curvature lines form one regular net across its parabolic curve, the premise of §5.2.
+  const ParametricSurfacePtr s = makeSurface("wave-roof");
+  const Triangulation t = layTriangulation(*s, options(0.1, LayingMethod::Prespecified));
+  const Quality q = quality(t, *s, 0.1);
+  // Measured: edges 0.47 .. 1.25 cells (the short ones where rows meet the curved boundary), one Dupin
+  // hexagon of 1999 self-intersecting before planarization.
+  checkFigure(q, 0.45, 1.3, 0, 0.001);
+  CHECK(q.check.regularFraction == 1.0);
+  CHECK(q.check.coverage > 0.9);
+}
+
+TEST_CASE("laying: two round bumps, beyond §5.2's premise (umbilics inside parabolic rings)") {
   const ParametricSurfacePtr s = makeSurface("freeform");
   LayingOptions o = options(0.1, LayingMethod::Prespecified);
   o.start = Vec3(1, -1, 0);
@@ -400,6 +412,34 @@ TEST_CASE("laying: on a surface with parabolic curves the rows follow the family
   p.direction.reset();
   const PipelineResult outer = runPipeline(p);
   CHECK(outer.metrics.selfIntersectingCount <= 3);
+}
+
+TEST_CASE("laying: across a parabolic curve the rows follow its zero-curvature direction, and the faces turn into bricks (§5.3)") {
+  // On the wave roof the zero-curvature direction at the parabolic curve runs along x, across the curve; a
+  // planar face there is a brick with its long sides along x, and bricks stack in courses along the rows.
+  // Rows laid along the curve instead (the y direction) leave faces that fold or stay unplanar there.
+  const ParametricSurfacePtr s = makeSurface("wave-roof");
+  CHECK(parabolicBaseFamily(*s, options(0.1, LayingMethod::Prespecified)) == BaseFamily::First);
+  PipelineParams p;
+  p.surface = "wave-roof";
+  p.method = TriangulationMethod::Prespecified;
+  p.faces = 4000;
+  const PipelineResult across = runPipeline(p);
+  p.direction = Vec3(0, 1, 0);
+  const PipelineResult along = runPipeline(p);
+  INFO("self-intersecting faces: across " << across.metrics.selfIntersectingCount << ", along "
+                                          << along.metrics.selfIntersectingCount << "; planarity across "
+                                          << across.metrics.planarityMax << ", along " << along.metrics.planarityMax);
+  CHECK(across.solve.converged);
+  CHECK(across.metrics.selfIntersectingCount == 0);
+  CHECK(across.interiorHexagonFraction >= 0.99);
+  CHECK((!along.solve.converged || along.metrics.selfIntersectingCount >= 10));
+  // The default start and family choice lands on the same network.
+  p.method = TriangulationMethod::Auto;
+  p.direction.reset();
+  const PipelineResult automatic = runPipeline(p);
+  CHECK(automatic.metrics.selfIntersectingCount == 0);
+  CHECK(automatic.solve.converged);
 }
 
 TEST_CASE("laying: rows are not resampled on a parabolic curve") {

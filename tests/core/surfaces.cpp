@@ -91,7 +91,8 @@ TEST_CASE("surfaces: normals point outward on closed and revolution surfaces, up
   const std::set<std::string> closed = {"torus", "cyclide"};
   const std::set<std::string> revolution = {"sphere", "ellipsoid", "hyperboloid", "vase",
                                             "cylinder", "cone", "catenoid"};
-  const std::set<std::string> heightFields = {"elliptic-paraboloid", "hyperbolic-paraboloid", "plane", "freeform"};
+  const std::set<std::string> heightFields = {"elliptic-paraboloid", "hyperbolic-paraboloid", "plane", "freeform",
+                                              "wave-roof"};
   for (const SurfaceSpec& spec : analyticSurfaces()) {
     const ParametricSurfacePtr s = makeSurface(spec.name);
     const ParametricSurface::Domain d = s->domain();
@@ -308,6 +309,31 @@ TEST_CASE("surfaces: the free-form height field has elliptic, hyperbolic and par
   CHECK(hyperbolic);
 }
 
+TEST_CASE("surfaces: the wave roof has one parabolic curve and no umbilics") {
+  // Elliptic where the wave's trough curves like the vault, hyperbolic where its crest curves against it; the
+  // parabolic curve between them is x = -(bend / wavenumber) y^2 (the phase 1.5 x + 0.3 y^2 crossing 0).
+  const ParametricSurfacePtr s = makeSurface("wave-roof");
+  int elliptic = 0, hyperbolic = 0;
+  double closestToUmbilic = 1;
+  for (int i = 0; i <= 40; ++i)
+    for (int j = 0; j <= 40; ++j) {
+      const double x = -1.5 + 3.0 * i / 40, y = -1.5 + 3.0 * j / 40;
+      const LocalGeometry g = s->geometryAt(x, y);
+      const double K = g.gaussianCurvature(), onCurve = x + 0.2 * y * y;
+      if (std::abs(onCurve) > 0.05) {
+        INFO("x " << x << ", y " << y << ", K " << K);
+        CHECK((K > 0) == (onCurve < 0));
+      }
+      elliptic += K > 0;
+      hyperbolic += K < 0;
+      closestToUmbilic = std::min(closestToUmbilic, std::abs(g.k1 - g.k2) / (std::abs(g.k1) + std::abs(g.k2)));
+    }
+  CHECK(elliptic > 600);
+  CHECK(hyperbolic > 600);
+  CHECK(closestToUmbilic > 0.1);  // the curvature lines form one regular net (§5.2's premise)
+  CHECK_THROWS_WITH(makeSurface("wave-roof", {{"radius", 1.0}}), Catch::Contains("more than half the side"));
+}
+
 TEST_CASE("surfaces: defaults are in range and documented") {
   std::set<std::string> names;
   for (const SurfaceSpec& spec : analyticSurfaces()) {
@@ -323,7 +349,7 @@ TEST_CASE("surfaces: defaults are in range and documented") {
   }
   for (const char* name : {"sphere", "ellipsoid", "torus", "hyperboloid", "cyclide", "vase", "elliptic-paraboloid",
                            "hyperbolic-paraboloid", "cylinder", "cone", "plane", "enneper", "catenoid", "helicoid",
-                           "freeform"})
+                           "freeform", "wave-roof"})
     CHECK(names.count(name) == 1);
 }
 

@@ -28,9 +28,10 @@ const char* layingMethodName(LayingMethod method);
 
 // Which family of the conjugate network (field, conjugate field) the base curves follow.
 enum class BaseFamily {
-  Auto,       // on a surface with parabolic curves, the family that runs along them (§5.3: the network should
-              // contain them; on a torus the parallels, the only feasible choice of Fig. 19);
-              // elsewhere the one of smaller normal curvature at the start point (on a developable: the rulings)
+  Auto,       // on a surface with parabolic curves, the family along the zero-curvature direction there
+              // (§5.3: on a torus the parallels, the only feasible choice of Fig. 19; on a vase the meridians),
+              // see parabolicBaseFamily; elsewhere the one of smaller normal curvature at the start point (on a
+              // developable: the rulings)
   First,      // the field itself (D_F)
   Conjugate   // its conjugate (D_G)
 };
@@ -54,6 +55,12 @@ struct LayingOptions {
   int maxLayers = 100000;    // layers over all fronts; laying stops there (with a note)
   int maxVertices = 4000000; // more would be needed: Error(InvalidParameter) naming the cell size
 };
+
+// The family BaseFamily::Auto takes on `surface` for options.field whatever the start: the one nearer the
+// zero-curvature direction at the near-parabolic points (two thirds of them at least), or Auto where the
+// surface has none or they disagree (the start point's normal curvatures decide then). Throws like
+// layTriangulation for a bad field or cell.
+BaseFamily parabolicBaseFamily(const Surface& surface, const LayingOptions& options);
 
 // §5.3: the step ratio actually used for a computed ratio r >= 0 and a lower bound b > 0:
 // r when r >= 2b, else b + r^2 / (4b) — at least b, and joining r smoothly at 2b. b <= 0 returns r.
