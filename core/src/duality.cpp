@@ -108,8 +108,11 @@ TriangleFrame frameOf(const std::vector<LocalGeometry>& geo, const TriMesh& T, i
 }
 
 // Singular values of the three tangent planes' normals below this fraction of the largest are left free
-// (the point stays at the centroid's coordinate there) in a triangle across a parabolic curve.
+// (the point stays at the centroid's coordinate there) in a triangle at a parabolic curve.
 constexpr double kStraddlingPlanes = 0.1;
+// A triangle whose smallest |K| at a corner is below this fraction of its largest has that corner on a
+// parabolic curve, for the dual point.
+constexpr double kOnParabolic = 0.05;
 
 // A dual vertex must stay near its triangle: a far one means an ill-posed construction (§6 fallback).
 bool plausible(const Vec3& x, const TriangleFrame& fr) {
@@ -267,16 +270,23 @@ DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
     const double h2 = fr.longestEdge * fr.longestEdge;
     bool parabolic = false, straddles = false;
     const double K0 = g[0]->gaussianCurvature();
+    double smallestK = std::abs(K0), largestK = std::abs(K0);
     for (int c = 0; c < 3; ++c) {
       const double K = g[c]->gaussianCurvature();
       parabolic |= std::abs(K) * h2 < 1e-8 || (K > 0) != (K0 > 0);
-      straddles |= (K > 0) != (K0 > 0) && std::max(std::abs(K), std::abs(K0)) * h2 >= 1e-8;
+      straddles |= (K > 0) != (K0 > 0);
+      smallestK = std::min(smallestK, std::abs(K));
+      largestK = std::max(largestK, std::abs(K));
     }
-    // A triangle across a parabolic curve: its tangent planes nearly share the zero-curvature direction, so
-    // where they meet is ill-determined along it. The point nearest the centroid along that direction (and on
-    // the planes in the others) keeps the face there a brick with its long sides along it (see the laying's
-    // base family); the far intersection or the bare centroid, mixed between neighbours, folded them.
-    if (straddles) return tangentPoint(geo, T, f, fr, x, kStraddlingPlanes);
+    // A triangle across a parabolic curve, or with a corner on it (|K| there under kOnParabolic of its
+    // largest): its tangent planes nearly share the zero-curvature direction, so where they meet is
+    // ill-determined along it, and a Dupin conic through a corner on the curve is nearly two parallel lines
+    // whose centre runs off along it. The point nearest the centroid along that direction (and on the planes
+    // in the others) keeps the face there a brick with its long sides along it (see the laying's base
+    // family); the far intersection, the bare centroid or a far Dupin centre, mixed between neighbours,
+    // folded them or left them unplanar. Not on a developable or a plane (K = 0 at every corner).
+    if (largestK * h2 >= 1e-8 && (straddles || smallestK < kOnParabolic * largestK))
+      return tangentPoint(geo, T, f, fr, x, kStraddlingPlanes);
     if (!parabolic) {
       // §6 steps 2-3: one conic centre per vertex, averaged. The conic of vertex c passes through c itself
       // and the vertical projections of the other two.
