@@ -3,7 +3,7 @@
 //   PHEX_BENCH_QUICK=1        only the 1k and 10k cases
 //   PHEX_BENCH_SOLVERS=local  only these solvers (comma-separated)
 //   PHEX_BENCH_SIZES=1000     only these face counts (comma-separated; overrides PHEX_BENCH_QUICK)
-//   PHEX_BENCH_SURFACES=torus only these surfaces (comma-separated: torus, cyclide, freeform.obj)
+//   PHEX_BENCH_SURFACES=torus only these surfaces (comma-separated: torus, cyclide, wave-roof.obj, freeform.obj)
 //   PHEX_BENCH_REPEAT=5       runs per case up to 10k faces, median reported (one run above 10k)
 //   PHEX_BENCH_CERES_100K=1   also the Ceres solvers above 10k faces (planes: ~35 s per Gauss-Newton
 //                             iteration and ~1.5 GB at 100k faces natively; volumes far more)
@@ -21,15 +21,20 @@ const outDir = process.env.PHEX_BENCH_OUT ?? join(repo, 'build/bench');
 const scratch = mkdtempSync(join(tmpdir(), 'phex-bench-'));
 const sizes = process.env.PHEX_BENCH_SIZES ? process.env.PHEX_BENCH_SIZES.split(',').map(Number)
   : process.env.PHEX_BENCH_QUICK ? [1000, 10000] : [1000, 10000, 100000];
-const surfaces = (process.env.PHEX_BENCH_SURFACES ?? 'torus,cyclide,freeform.obj').split(',');
+const surfaces = (process.env.PHEX_BENCH_SURFACES ?? 'torus,cyclide,wave-roof.obj,freeform.obj').split(',');
 
 // Every solver side by side where it finishes in reasonable time; the Ceres ones stop at 10k faces
 // (their Gauss-Newton steps cost seconds there and about half a minute at 100k, see the README) unless
 // PHEX_BENCH_CERES_100K is set.
 const solvers = (process.env.PHEX_BENCH_SOLVERS ?? 'local,planes,volumes').split(',');
-// An uploaded free-form mesh: the free-form height field sampled finely as OBJ by phex itself.
-const freeformMesh = join(scratch, 'freeform.obj');
-if (surfaces.includes('freeform.obj')) spawnSync(cli, ['triangulate', '--surface', 'freeform', '--method', 'lattice', '--faces', '60000', '--out', freeformMesh, '--quiet']);
+// Uploaded free-form meshes: analytic height fields sampled finely (120k triangles) as OBJ by phex itself —
+// the wave roof (one parabolic curve, curvature lines without umbilics: §5.2's premise) and the two round
+// bumps (umbilics inside parabolic rings: no singularity-free conjugate network exists).
+const meshFiles = {};
+for (const surface of surfaces.filter((s) => s.endsWith('.obj'))) {
+  meshFiles[surface] = join(scratch, surface);
+  spawnSync(cli, ['triangulate', '--surface', surface.slice(0, -4), '--method', 'lattice', '--faces', '60000', '--out', meshFiles[surface], '--quiet']);
+}
 const cases = [];
 for (const surface of surfaces)
   for (const faces of sizes)
@@ -56,7 +61,7 @@ function native(c) {
 
 function nativeOnce(c) {
   const report = join(scratch, 'r.json');
-  const input = isMesh(c) ? ['--mesh', freeformMesh] : ['--surface', c.surface];
+  const input = isMesh(c) ? ['--mesh', meshFiles[c.surface]] : ['--surface', c.surface];
   const args = ['run', ...input, '--faces', String(c.faces), '--solver', c.solver, '--report', report, '--quiet'];
   const started = performance.now();
   const p = spawnSync(cli, args, { encoding: 'utf8' });
@@ -71,7 +76,7 @@ function nativeOnce(c) {
 }
 
 function wasm(c) {
-  const base = isMesh(c) ? { meshFile: freeformMesh, faces: c.faces, solver: c.solver } : c;
+  const base = isMesh(c) ? { meshFile: meshFiles[c.surface], faces: c.faces, solver: c.solver } : c;
   const params = { ...base, repeat: repeatOf(c), ...(c.faces > 10000 ? { warmupFaces: 10000 } : {}) };
   const p = spawnSync('node', ['--no-experimental-fetch', join(repo, 'bench/wasm-case.mjs'), JSON.stringify(params)],
     { encoding: 'utf8', maxBuffer: 1 << 26 });
