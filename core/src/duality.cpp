@@ -215,11 +215,14 @@ DualMesh assembleDual(const TriMesh& T, const Points& U, const std::vector<Local
         const Vec3 e1 = T.V.row(T.F(f, (k + 1) % 3)) - T.V.row(v), e2 = T.V.row(T.F(f, (k + 2) % 3)) - T.V.row(v);
         fanAngle += std::atan2(e1.cross(e2).norm(), e1.dot(e2));
       }
-      if (fanAngle < 150.0 * M_PI / 180.0) {
-        // The vertex as the panel's corner, unless the polygon would cross itself with it (a lone skinny
-        // triangle at a sharp corner whose dual point lies outside it): then the panel is cut off before it.
-        std::vector<Vec2> polygon;
-        for (int id : ids) polygon.push_back(toTangentPlane(geo[v], points[id]));
+      // The vertex as the panel's corner where the boundary turns sharply, unless the polygon would cross
+      // itself with it (a lone skinny triangle at a sharp corner whose dual point lies outside it): then the
+      // panel is cut off before it. Where it turns gently the vertex is a corner only if the panel crosses
+      // itself without it: a dual point between the vertex and the chord of its two edge points (a short
+      // fan whose triangle point fell next to the vertex).
+      std::vector<Vec2> polygon;
+      for (int id : ids) polygon.push_back(toTangentPlane(geo[v], points[id]));
+      if (fanAngle < 150.0 * M_PI / 180.0 || polygonSelfIntersects(polygon)) {
         polygon.push_back(Vec2::Zero());
         if (!polygonSelfIntersects(polygon)) {
           ids.push_back(static_cast<int>(points.size()));
