@@ -164,6 +164,21 @@ namespace {
 // network contains) the other family is laid from the same candidates and kept if it scores better.
 constexpr double kPoorTrial = 0.8;  // a trial score (coverage minus 5x the bad share) below which more is tried
 
+// The most nearly umbilic of some 400 samples of the surface (relative k1 - k2 under kNearUmbilic) where it
+// is curved (not on a plane or a developable), or nullopt.
+constexpr double kNearUmbilic = 0.05;
+std::optional<Vec3> umbilicWithinCurvedPart(const Surface& surface) {
+  std::optional<Vec3> best;
+  double lowest = kNearUmbilic;
+  for (const LocalGeometry& g : surface.samples(400)) {
+    const double a = std::abs(g.k1), b = std::abs(g.k2);
+    if (!(std::min(a, b) > 0.05 * std::max(a, b))) continue;  // flat in a direction: not an umbilic
+    const double gap = std::abs(g.k1 - g.k2) / (a + b);
+    if (gap < lowest) lowest = gap, best = g.point;
+  }
+  return best;
+}
+
 struct StartChoice {
   std::optional<Vec3> start;        // nullopt: the default start (nothing to choose between)
   BaseFamily base = BaseFamily::Auto;
@@ -352,10 +367,23 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
     }
   }
   t.check = checkTriangulation(t.triangulation, *t.surface);
-  if (t.check.coverage >= 0 && t.check.coverage < 0.8)
+  if (t.check.coverage >= 0 && t.check.coverage < 0.8) {
     t.triangulation.notes.push_back("the triangulation covers only " + std::to_string(int(std::round(100 * t.check.coverage))) +
                                     " % of the surface: its layers stopped short (see the notes above); another "
                                     "field, method or start point may cover more");
+    if (t.field == "principal") {
+      const std::optional<Vec3> umbilic = umbilicWithinCurvedPart(*t.surface);
+      if (umbilic) {
+        std::ostringstream s;
+        s << "the principal directions turn around an umbilic (k1 = k2) near (" << umbilic->x() << ", "
+          << umbilic->y() << ", " << umbilic->z() << "): the curvature lines have a singularity there, and §5.2's "
+             "methods need a regular conjugate network (§7). Around a bump whose parabolic curve closes into a "
+             "ring no such network exists; tile such a surface in patches, or choose a field without the "
+             "singularity where there is one (e.g. param on a height field that is elliptic throughout)";
+        t.triangulation.notes.push_back(s.str());
+      }
+    }
+  }
   return t;
 }
 

@@ -184,3 +184,21 @@ TEST_CASE("pipeline: the start point and laying direction can be set, and are ch
   p.direction = Vec3::Zero();
   CHECK_THROWS_WITH(triangulate(p), Catch::Contains("direction"));
 }
+
+TEST_CASE("pipeline: a partial laying on a surface with umbilics names one") {
+  // The free-form bumps: their tops are umbilics inside parabolic rings, where no regular conjugate
+  // network exists (§7); the note says where and why, beside the coverage.
+  PipelineParams p;
+  p.surface = "freeform";
+  p.faces = 1000;
+  const TriangulationStage t = triangulate(p);
+  REQUIRE(t.check.coverage < 0.8);
+  bool named = false;
+  for (const std::string& n : t.triangulation.notes) named |= n.find("umbilic") != std::string::npos;
+  CHECK(named);
+  // The wave roof's curvature lines are regular: covered, and no such note.
+  p.surface = "wave-roof";
+  const TriangulationStage roof = triangulate(p);
+  CHECK(roof.check.coverage > 0.9);
+  for (const std::string& n : roof.triangulation.notes) CHECK(n.find("umbilic") == std::string::npos);
+}
