@@ -25,6 +25,11 @@ constexpr double kResampleBelow = 0.55, kResampleAbove = 1.8;  // row spacing / 
 constexpr double kResampleLimit = 2.5;  // ... even at a parabolic curve
 constexpr double kValidMargin = 1.1;  // Method 2 keeps the apexes this far above DE (in units of validStep)
 constexpr double kZipGap = 1.6;       // fronts facing each other closer than this many steps are zipped
+// The open rows of L0's two fronts facing each other closer than this many of their steps share out the gap
+// between them: it is laid in whole layers of equal height no lower than a step (zipIfMeeting), the last one
+// zipped. Full steps would leave whatever remains for the zip, down to slivers, whose stars (K < 0 in
+// particular) and Dupin hexagons fold. Closed rows (loops around a tube) and split fronts keep kZipGap.
+constexpr double kMeetReach = 3.5;
 constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
 constexpr double kEllFirst = 1.5;     // ... at first only this many: further where no crossing is found
 constexpr int kParabolicSamples = 400;  // samples of the surface that vote for the base family at parabolic curves
@@ -188,11 +193,12 @@ class Laying {
   Triangulation run(const SurfacePoint& start, const Vec3& initial);
 
  private:
-  int addVertex(const SurfacePoint& p, double ratio);
+  int addVertex(const SurfacePoint& p, double ratio, double height = std::numeric_limits<double>::quiet_NaN());
   Row baseCurve(const SurfacePoint& start, const Vec3& initial);
-  bool zipIfMeeting(std::size_t f);
+  bool zipIfMeeting(std::size_t f, double& stepScale);
   bool facing(const Front& a, const Front& b) const;
-  void layLayer(std::size_t f);
+  std::optional<double> facingGap(const Front& a, const Front& b, bool& staggered) const;
+  void layLayer(std::size_t f, double stepScale);
   bool extendRow(Row& row, bool atStart);
   Segment segment(const Row& row, int i) const;
   std::vector<std::optional<Apex>> progressiveApexes(const Row& row, const std::vector<Segment>& segments) const;
@@ -214,6 +220,7 @@ class Laying {
 
   std::vector<SurfacePoint> vertices_;
   std::vector<double> vertexRatio_;  // the step ratio each vertex was laid with (NaN on L0): §5.3 re-use
+  std::vector<double> vertexHeight_; // its distance from the row it was laid from, across that row (NaN on L0)
   std::vector<char> inBase_;         // vertices of the row being laid from (exempt from the collision test)
   std::vector<Eigen::Vector3i> triangles_;
   PointGrid grid_;
@@ -236,7 +243,7 @@ void Laying::cannotTile(const SurfacePoint& where, const std::string& why) const
                   layingMethodName(o_.method) + " method) near " + describe(walker_, where) + ": " + why);
 }
 
-int Laying::addVertex(const SurfacePoint& p, double ratio) {
+int Laying::addVertex(const SurfacePoint& p, double ratio, double height) {
   if (static_cast<int>(vertices_.size()) >= o_.maxVertices) {
     std::ostringstream msg;
     msg << "cell " << o_.cell << " is too small for this surface: more than maxVertices = " << o_.maxVertices
@@ -246,6 +253,7 @@ int Laying::addVertex(const SurfacePoint& p, double ratio) {
   const int id = static_cast<int>(vertices_.size());
   vertices_.push_back(p);
   vertexRatio_.push_back(ratio);
+  vertexHeight_.push_back(height);
   inBase_.push_back(0);
   grid_.insert(id, p.point());
   return id;
@@ -615,7 +623,7 @@ bool Laying::extendRow(Row& row, bool atStart) {
     return false;
   }
   if (collides(p.point(), 0.5 * spacing)) return false;
-  const int id = addVertex(p, vertexRatio_[row.ids[end]]);
+  const int id = addVertex(p, vertexRatio_[row.ids[end]], vertexHeight_[row.ids[end]]);
   inBase_[id] = 1;
   if (atStart) {
     row.ids.insert(row.ids.begin(), id);
@@ -699,26 +707,108 @@ bool Laying::facing(const Front& a, const Front& b) const {
   return 2 * near >= samples;
 }
 
-bool Laying::zipIfMeeting(std::size_t f) {
-  for (std::size_t k = 0; k < fronts_.size(); ++k) {
-    if (k == f || !fronts_[k].active || !facing(fronts_[f], fronts_[k])) continue;
-    const Row& a = fronts_[f].row;
-    Row b = reversed(fronts_[k].row);
-    zip(a.ids, a.closed, b.ids, b.closed);
-    std::ostringstream note;
-    note << "two fronts met near " << describe(walker_, vertices_[a.ids[a.ids.size() / 2]]) << " and were zipped ("
-         << a.ids.size() << " and " << b.ids.size() << " vertices"
-         << (a.ids.size() == b.ids.size() && a.closed && b.closed ? ", valence 6 kept"
-                                                                   : ", irregular vertices where the counts differ")
-         << ")";
-    zipNotes_.push_back(note.str());
-    fronts_[f].active = fronts_[k].active = false;
-    return true;
+// How far b's row lies ahead of a's (to its left), in a's steps: the median over a's vertices of the gap across
+// a's row to b's nearest vertex, divided by the height that vertex was laid at (about the step the next layer
+// takes there). nullopt unless b's row lies ahead along most of a, within about kMeetReach steps.
+std::optional<double> Laying::facingGap(const Front& a, const Front& b, bool& staggered) const {
+  const std::vector<int>& P = a.row.ids;
+  const std::vector<int>& Q = b.row.ids;
+  if (P.size() < 2 || Q.size() < 2) return std::nullopt;
+  const double fallback = std::max({a.lastStep, b.lastStep, 0.25 * o_.cell});
+  auto stepAt = [&](int id) {
+    const double h = vertexHeight_[id];
+    return h > 0 ? std::max(h, 0.25 * o_.cell) : fallback;
+  };
+  double widest = 0;
+  for (int id : P) widest = std::max(widest, stepAt(id));
+  const double reach = kMeetReach + 0.5;  // the nearest vertex may be half a spacing along the row
+  Box3 boxP, boxQ;
+  for (int id : P) boxP.extend(vertices_[id].point());
+  for (int id : Q) boxQ.extend(vertices_[id].point());
+  const Vec3 pad = Vec3::Constant(reach * widest);
+  if (!Box3(boxP.min() - pad, boxP.max() + pad).intersects(boxQ)) return std::nullopt;
+  const int n = static_cast<int>(P.size()), stride = std::max(1, n / 48);
+  int samples = 0, halfway = 0;
+  std::vector<double> gaps;
+  for (int k = 0; k < n; k += stride) {
+    ++samples;
+    const SurfacePoint& p = vertices_[P[k]];
+    const Vec3 tangent = vertices_[P[std::min(k + 1, n - 1)]].point() - vertices_[P[std::max(k - 1, 0)]].point();
+    const Vec3 left = p.g.normal.cross(tangent).normalized();
+    double best = std::numeric_limits<double>::infinity();
+    Vec3 offset = Vec3::Zero();
+    for (int id : Q) {
+      const double d = (vertices_[id].point() - p.point()).norm();
+      if (d < best) best = d, offset = vertices_[id].point() - p.point();
+    }
+    const double step = stepAt(P[k]), across = offset.dot(left);
+    // Ahead along the surface, not across a tube or a fold (the offset lies nearly in the tangent plane).
+    if (best < reach * step && across > 0.2 * best && std::abs(offset.dot(p.g.normal)) < 0.5 * best) {
+      gaps.push_back(across / step);
+      // Half a spacing along the row (a regular zip) or level with it (its triangles would be right-angled).
+      const double spacing = 0.5 * tangent.norm() * (k > 0 && k + 1 < n ? 1.0 : 2.0);
+      halfway += std::abs(offset.dot(tangent.normalized())) > 0.25 * spacing;
+    }
   }
-  return false;
+  if (gaps.empty() || 2 * static_cast<int>(gaps.size()) < samples) return std::nullopt;
+  staggered = 2 * halfway >= static_cast<int>(gaps.size());
+  std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
+  return gaps[gaps.size() / 2];
 }
 
-void Laying::layLayer(std::size_t f) {
+// Zips front f to a front facing it. Closed rows (the loops of a tube meet level and whole) and the rows of split
+// fronts are zipped to the first front within kZipGap steps. The open rows of L0's two fronts, neither split
+// (going round a surface closed across L0, they meet at its seam), are zipped when the gap between them is about
+// one layer high; when it is a few layers high, stepScale receives the factor that makes them equal, for f's
+// next layer (else 1).
+bool Laying::zipIfMeeting(std::size_t f, double& stepScale) {
+  stepScale = 1;
+  std::size_t nearest = fronts_.size();
+  double gap = kMeetReach;
+  bool staggered = true;
+  const bool unsplit = fronts_.size() == 2;  // the two fronts of L0, neither split yet
+  for (std::size_t k = 0; k < fronts_.size() && gap > 0; ++k) {
+    if (k == f || !fronts_[k].active) continue;
+    if (!unsplit || fronts_[f].row.closed || fronts_[k].row.closed) {
+      if (facing(fronts_[f], fronts_[k])) gap = 0, nearest = k;
+      continue;
+    }
+    // Each along most of the other. Where the gap cannot be measured so (one row across a tube from the
+    // other), the kZipGap rule.
+    bool s = true, t = true;
+    const std::optional<double> g = facingGap(fronts_[f], fronts_[k], s);
+    if (g && facingGap(fronts_[k], fronts_[f], t)) {
+      if (*g < gap) gap = *g, nearest = k, staggered = s;
+    } else if (facing(fronts_[f], fronts_[k])) {
+      gap = 0, nearest = k;
+    }
+  }
+  if (nearest == fronts_.size()) return false;
+  // Whole layers no lower than a step: Method 2 cannot lay them much lower anyway (its rows are raised until every
+  // star is valid), and a K < 0 star only stays valid with its apex far enough from the base. As many as keep the
+  // rows zipped last half a spacing apart along them: an odd count from staggered rows, an even one from level rows.
+  int layers = std::max(1, static_cast<int>(std::floor(gap)));
+  if (layers > 1 && (layers % 2 == 1) != staggered) --layers;
+  if (layers > 1) {
+    stepScale = gap / layers;
+    return false;
+  }
+  const Row& a = fronts_[f].row;
+  Row b = reversed(fronts_[nearest].row);
+  zip(a.ids, a.closed, b.ids, b.closed);
+  std::ostringstream note;
+  note << "two fronts met near " << describe(walker_, vertices_[a.ids[a.ids.size() / 2]]) << " and were zipped ("
+       << a.ids.size() << " and " << b.ids.size() << " vertices"
+       << (a.ids.size() == b.ids.size() && a.closed && b.closed ? ", valence 6 kept"
+                                                                 : ", irregular vertices where the counts differ")
+       << ")";
+  zipNotes_.push_back(note.str());
+  fronts_[f].active = fronts_[nearest].active = false;
+  return true;
+}
+
+// stepScale < 1 or > 1 lays the layer lower or higher than §5.1 / §5.3 would (to share out a gap, zipIfMeeting).
+void Laying::layLayer(std::size_t f, double stepScale) {
   Row A = fronts_[f].row;
   for (int id : A.ids) inBase_[id] = 1;
   for (int k = 0; k < 2; ++k) {
@@ -737,6 +827,12 @@ void Laying::layLayer(std::size_t f) {
       cannotTile(segments.back().M, kAsymptoticBase);
     if (!asymptoticStops_++) firstAsymptoticStop_ = describe(walker_, segments.back().M);
   }
+  if (stepScale != 1)
+    for (Segment& s : segments) {
+      if (s.asymptotic || s.degenerate) continue;
+      s.step *= stepScale;
+      s.apexInPlane = s.M.point() + stepScale * (s.apexInPlane - s.M.point());
+    }
   Row next;
   std::vector<std::optional<Apex>> apexes = o_.method == LayingMethod::Progressive
                                                 ? progressiveApexes(A, segments)
@@ -818,10 +914,15 @@ void Laying::layLayer(std::size_t f) {
     Row& C = front.row;
     C.closed = closedRun;
     std::vector<Apex> run;
-    double step = 0;
+    std::vector<double> heights;  // of the apexes above their bases
+    double step = 0, height = 0;
     for (int k = 0; k < length; ++k) {
-      run.push_back(*apexes[(first + k) % n]);
-      step += segments[(first + k) % n].step;
+      const int i = (first + k) % n;
+      run.push_back(*apexes[i]);
+      step += segments[i].step;
+      const Vec3 &a = vertices_[A.ids[i]].point(), &b = vertices_[A.ids[(i + 1) % count]].point();
+      heights.push_back((b - a).cross(run.back().p.point() - a).norm() / std::max((b - a).norm(), 1e-300));
+      height += heights.back() / length;
     }
     front.lastStep = step / length;
     // The row's curve: Method 2's fitted flow line, or Method 1's apex polyline.
@@ -868,7 +969,7 @@ void Laying::layLayer(std::size_t f) {
       for (int k = 0; k < m; ++k) arcs.push_back(C.sampleArc.front() + span * k / (closedRun ? m : m - 1));
       for (double t : arcs)
         C.ids.push_back(
-            addVertex(pointAtArc(walker_, C.curve, C.curveArc, C.closed, C.curveLength, t), ratio));
+            addVertex(pointAtArc(walker_, C.curve, C.curveArc, C.closed, C.curveLength, t), ratio, height));
       C.sampleArc = arcs;
       zip(below, closedRun, C.ids, closedRun);
       if (!resampled_++) {
@@ -878,7 +979,7 @@ void Laying::layLayer(std::size_t f) {
         firstResample_ = where.str();
       }
     } else {
-      for (const Apex& a : run) C.ids.push_back(addVertex(a.p, a.ratio));
+      for (int k = 0; k < length; ++k) C.ids.push_back(addVertex(run[k].p, run[k].ratio, heights[k]));
       for (int k = 0; k < length; ++k) {
         const int i = (first + k) % n;
         triangles_.emplace_back(A.ids[i], A.ids[(i + 1) % count], C.ids[k]);
@@ -916,7 +1017,8 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
       if (!fronts_[f].active) continue;
       checkCancel(cancel_);
       any = true;
-      if (!zipIfMeeting(f)) layLayer(f);
+      double stepScale = 1;
+      if (!zipIfMeeting(f, stepScale)) layLayer(f, stepScale);
     }
     if (!any) break;
     if (progress_) {
