@@ -196,6 +196,12 @@ class Laying {
   int addVertex(const SurfacePoint& p, double ratio, double height = std::numeric_limits<double>::quiet_NaN());
   Row baseCurve(const SurfacePoint& start, const Vec3& initial);
   bool zipIfMeeting(std::size_t f, double& stepScale);
+  struct RowOffset {
+    Vec3 tangent, left, offset = Vec3::Zero();
+    double distance = std::numeric_limits<double>::infinity();
+  };
+  bool rowsWithin(const std::vector<int>& P, const std::vector<int>& Q, double pad) const;
+  RowOffset offsetToRow(const std::vector<int>& P, int k, const std::vector<int>& Q) const;
   bool facing(const Front& a, const Front& b) const;
   std::optional<double> facingGap(const Front& a, const Front& b, bool& staggered) const;
   void layLayer(std::size_t f, double stepScale);
@@ -678,31 +684,42 @@ void Laying::zip(std::vector<int> P, bool closedP, std::vector<int> Q, bool clos
   }
 }
 
+// Whether the bounding boxes of rows P and Q, P's grown by `pad`, overlap.
+bool Laying::rowsWithin(const std::vector<int>& P, const std::vector<int>& Q, double pad) const {
+  Box3 boxP, boxQ;
+  for (int id : P) boxP.extend(vertices_[id].point());
+  for (int id : Q) boxQ.extend(vertices_[id].point());
+  return Box3(boxP.min() - Vec3::Constant(pad), boxP.max() + Vec3::Constant(pad)).intersects(boxQ);
+}
+
+// At P's k-th vertex: P's tangent there (central difference), its left across the row, and the offset to Q's
+// nearest vertex with its length.
+Laying::RowOffset Laying::offsetToRow(const std::vector<int>& P, int k, const std::vector<int>& Q) const {
+  const int n = static_cast<int>(P.size());
+  const SurfacePoint& p = vertices_[P[k]];
+  RowOffset r;
+  r.tangent = vertices_[P[std::min(k + 1, n - 1)]].point() - vertices_[P[std::max(k - 1, 0)]].point();
+  r.left = p.g.normal.cross(r.tangent).normalized();
+  for (int id : Q) {
+    const double d = (vertices_[id].point() - p.point()).norm();
+    if (d < r.distance) r.distance = d, r.offset = vertices_[id].point() - p.point();
+  }
+  return r;
+}
+
 // True when b's row lies just ahead of a's (to its left), closer than kZipGap steps along most of a.
 bool Laying::facing(const Front& a, const Front& b) const {
   const std::vector<int>& P = a.row.ids;
   const std::vector<int>& Q = b.row.ids;
   if (P.size() < 2 || Q.size() < 2) return false;
   const double gap = kZipGap * std::max({a.lastStep, b.lastStep, 0.25 * o_.cell});
-  Box3 boxP, boxQ;
-  for (int id : P) boxP.extend(vertices_[id].point());
-  for (int id : Q) boxQ.extend(vertices_[id].point());
-  const Vec3 pad = Vec3::Constant(gap);
-  if (!Box3(boxP.min() - pad, boxP.max() + pad).intersects(boxQ)) return false;
+  if (!rowsWithin(P, Q, gap)) return false;
   const int n = static_cast<int>(P.size()), stride = std::max(1, n / 48);
   int samples = 0, near = 0;
   for (int k = 0; k < n; k += stride) {
     ++samples;
-    const SurfacePoint& p = vertices_[P[k]];
-    const Vec3 tangent = vertices_[P[std::min(k + 1, n - 1)]].point() - vertices_[P[std::max(k - 1, 0)]].point();
-    const Vec3 left = p.g.normal.cross(tangent).normalized();
-    double best = std::numeric_limits<double>::infinity();
-    Vec3 offset = Vec3::Zero();
-    for (int id : Q) {
-      const double d = (vertices_[id].point() - p.point()).norm();
-      if (d < best) best = d, offset = vertices_[id].point() - p.point();
-    }
-    near += best < gap && offset.dot(left) > 0.2 * best;
+    const RowOffset r = offsetToRow(P, k, Q);
+    near += r.distance < gap && r.offset.dot(r.left) > 0.2 * r.distance;
   }
   return 2 * near >= samples;
 }
@@ -722,26 +739,17 @@ std::optional<double> Laying::facingGap(const Front& a, const Front& b, bool& st
   double widest = 0;
   for (int id : P) widest = std::max(widest, stepAt(id));
   const double reach = kMeetReach + 0.5;  // the nearest vertex may be half a spacing along the row
-  Box3 boxP, boxQ;
-  for (int id : P) boxP.extend(vertices_[id].point());
-  for (int id : Q) boxQ.extend(vertices_[id].point());
-  const Vec3 pad = Vec3::Constant(reach * widest);
-  if (!Box3(boxP.min() - pad, boxP.max() + pad).intersects(boxQ)) return std::nullopt;
+  if (!rowsWithin(P, Q, reach * widest)) return std::nullopt;
   const int n = static_cast<int>(P.size()), stride = std::max(1, n / 48);
   int samples = 0, halfway = 0;
   std::vector<double> gaps;
   for (int k = 0; k < n; k += stride) {
     ++samples;
     const SurfacePoint& p = vertices_[P[k]];
-    const Vec3 tangent = vertices_[P[std::min(k + 1, n - 1)]].point() - vertices_[P[std::max(k - 1, 0)]].point();
-    const Vec3 left = p.g.normal.cross(tangent).normalized();
-    double best = std::numeric_limits<double>::infinity();
-    Vec3 offset = Vec3::Zero();
-    for (int id : Q) {
-      const double d = (vertices_[id].point() - p.point()).norm();
-      if (d < best) best = d, offset = vertices_[id].point() - p.point();
-    }
-    const double step = stepAt(P[k]), across = offset.dot(left);
+    const RowOffset r = offsetToRow(P, k, Q);
+    const Vec3 &tangent = r.tangent, &offset = r.offset;
+    const double best = r.distance;
+    const double step = stepAt(P[k]), across = offset.dot(r.left);
     // Ahead along the surface, not across a tube or a fold (the offset lies nearly in the tangent plane).
     if (best < reach * step && across > 0.2 * best && std::abs(offset.dot(p.g.normal)) < 0.5 * best) {
       gaps.push_back(across / step);
