@@ -1205,6 +1205,7 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
                                            "); the cell is too coarse for this surface: ask for more faces or a "
                                            "smaller cell");
   }
+  trimBoundarySlivers(t);
   if (options.repairSweeps > 0) {
     checkCancel(cancel);
     repairStars(t, surface, options.repairSweeps);

@@ -254,4 +254,36 @@ TriangulationCheck checkTriangulation(const Triangulation& t, const Surface& sur
   return c;
 }
 
+int trimBoundarySlivers(Triangulation& triangulation, double ratio) {
+  TriMesh& T = triangulation.mesh;
+  const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
+  if (nf == 0) return 0;
+  const VertexRings rings = vertexRings(T);
+  std::vector<char> drop(nf, 0), touched(nv, 0);
+  int dropped = 0;
+  for (int v = 0; v < nv; ++v) {
+    const std::vector<int>& fan = rings.triangles[v];
+    if (fan.size() < 2 || rings.closed[v]) continue;
+    const int f = fan.front();  // its boundary edge runs from v to the next corner b
+    int k = 0;
+    while (T.F(f, k) != v) ++k;
+    const int b = T.F(f, (k + 1) % 3), c = T.F(f, (k + 2) % 3);
+    if (drop[f] || touched[c] || touched[v] || touched[b] || !rings.closed[c] || rings.triangles[b].size() < 2) continue;
+    const Vec3 a = T.V.row(v), e = T.V.row(b).transpose() - a, d = T.V.row(c).transpose() - a;
+    const double length = e.norm();
+    if (!(length > 0) || e.cross(d).norm() / length >= ratio * length) continue;
+    drop[f] = 1;
+    touched[c] = touched[v] = touched[b] = 1;
+    ++dropped;
+  }
+  if (dropped == 0) return 0;
+  Triangles kept(nf - dropped, 3);
+  for (int f = 0, row = 0; f < nf; ++f)
+    if (!drop[f]) kept.row(row++) = T.F.row(f);
+  T.F = kept;
+  triangulation.notes.push_back(std::to_string(dropped) + " sliver triangles dropped along the boundary (third corner "
+                                "within " + std::to_string(ratio).substr(0, 4) + " of the edge above it)");
+  return dropped;
+}
+
 }  // namespace phex

@@ -87,3 +87,37 @@ TEST_CASE("triangulation: invalid stars predict self-intersecting dual faces (Fi
   CHECK(checkTriangulation(valid, *s).invalidStars.empty());
   CHECK(measure(tangentDual(valid, *s).mesh).selfIntersectingCount == 0);
 }
+
+TEST_CASE("triangulation: slivers along an open boundary are dropped, the rest kept manifold") {
+  // A strip of a planar lattice with rows y = 0, 1 and 2 (the outer two on the boundary). Pulling the middle
+  // row's vertex at x = 2.5 down to y = 0.2 makes the triangle on the boundary edge (2, 0)-(3, 0) a sliver:
+  // it alone is dropped, and that vertex joins the boundary.
+  Triangulation t;
+  const int n = 6;
+  t.mesh.V.resize(3 * n, 3);
+  for (int r = 0; r < 3; ++r)
+    for (int i = 0; i < n; ++i) t.mesh.V.row(r * n + i) << i + 0.5 * (r % 2), r, 0;
+  std::vector<Eigen::RowVector3i> F;
+  for (int r = 0; r < 2; ++r)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int a = r * n + i, b = a + 1, c = (r + 1) * n + i, d = c + 1;
+      if (r % 2 == 0) F.push_back({a, b, c}), F.push_back({b, d, c});
+      else F.push_back({a, b, d}), F.push_back({a, d, c});
+    }
+  t.mesh.F.resize(static_cast<int>(F.size()), 3);
+  for (int f = 0; f < static_cast<int>(F.size()); ++f) t.mesh.F.row(f) = F[f];
+  const TriMesh before = t.mesh;
+  CHECK(trimBoundarySlivers(t) == 0);  // an equilateral strip: nothing to drop
+  CHECK(t.mesh.F.rows() == before.F.rows());
+  t.mesh.V.row(n + 2).y() = 0.2;  // the middle row's third vertex sinks to 0.2 over the bottom edge below it
+  const int dropped = trimBoundarySlivers(t);
+  CHECK(dropped == 1);
+  CHECK(t.mesh.F.rows() == before.F.rows() - 1);
+  CHECK_NOTHROW(vertexRings(t.mesh));  // still manifold
+  CHECK(t.notes.size() == 1);
+  // Every vertex is still used.
+  std::vector<int> uses(t.mesh.V.rows(), 0);
+  for (int f = 0; f < t.mesh.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) ++uses[t.mesh.F(f, c)];
+  CHECK(*std::min_element(uses.begin(), uses.end()) > 0);
+}

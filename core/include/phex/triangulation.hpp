@@ -77,4 +77,12 @@ struct RepairResult {
 };
 RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps = 12);
 
+// Drops the slivers along an open boundary: a triangle on a boundary edge whose third corner is an interior
+// vertex no higher than `ratio` times that edge above it (where the last row ran along the boundary, or
+// stopped slantwise at it). Its dual point falls near or beyond the edge and the boundary panels through it
+// fold or cannot be made planar; without it the third corner becomes a boundary vertex with a proper
+// panel. One triangle per corner and pass, and only where both ends of the edge keep another triangle
+// (connectivity stays manifold, no vertex is left unused). Returns how many were dropped; a note says so.
+int trimBoundarySlivers(Triangulation& triangulation, double ratio = 0.35);
+
 }  // namespace phex
