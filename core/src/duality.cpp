@@ -284,10 +284,12 @@ DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
     // A triangle across a parabolic curve, or with a corner on it (|K| there under kOnParabolic of its
     // largest): its tangent planes nearly share the zero-curvature direction, so where they meet is
     // ill-determined along it, and a Dupin conic through a corner on the curve is nearly two parallel lines
-    // whose centre runs off along it. The point nearest the centroid along that direction (and on the planes
-    // in the others) keeps the face there a brick with its long sides along it (see the laying's base
-    // family); the far intersection, the bare centroid or a far Dupin centre, mixed between neighbours,
-    // folded them or left them unplanar. Not on a developable or a plane (K = 0 at every corner).
+    // whose centre runs off along it. The point taken keeps the centroid's coordinates along the directions
+    // the planes determine weakly (singular values under kStraddlingPlanes of the largest: the
+    // zero-curvature one, and at fine cells the other tangent one too) and lies on the planes otherwise, so
+    // the faces there stay bricks with their long sides along it (see the laying's base family). The far
+    // intersection, the bare centroid or a far Dupin centre, mixed between neighbours, folded them or left
+    // them unplanar. Not on a developable or a plane (K = 0 at every corner).
     if (largestK * h2 >= 1e-8 && (straddles || smallestK < kOnParabolic * largestK))
       return tangentPoint(geo, T, f, fr, x, kStraddlingPlanes);
     if (!parabolic) {
