@@ -1186,9 +1186,12 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
   } else if (options.baseDirection) {
     family = std::abs(dF->dot(hint)) >= std::abs(dG->dot(hint)) ? Family::First : Family::Conjugate;
   } else if (options.base == BaseFamily::Auto) {
+    // A tie (as everywhere on a sphere) goes to the conjugate family whatever the round-off, so that native
+    // and wasm builds lay alike.
     const std::optional<Family> alongZero = familyAlongZeroCurvature(walker, field);
     family = alongZero ? *alongZero
-                            : normalCurvature(*dF) <= normalCurvature(*dG) ? Family::First : Family::Conjugate;
+                            : normalCurvature(*dF) < (1 - 1e-9) * normalCurvature(*dG) ? Family::First
+                                                                                       : Family::Conjugate;
   } else {
     family = options.base == BaseFamily::First ? Family::First : Family::Conjugate;
   }
