@@ -1116,6 +1116,24 @@ std::optional<Family> familyAlongZeroCurvature(const SurfaceWalker& walker, cons
   return std::nullopt;
 }
 
+// Every option in range, else Error(InvalidParameter) naming it.
+void checkOptions(const LayingOptions& options) {
+  auto invalid = [](const std::string& name, double value, const std::string& range) {
+    std::ostringstream msg;
+    msg << "laying option " << name << " = " << value << " is out of range (" << range << ")";
+    throw Error(ErrorCode::InvalidParameter, msg.str());
+  };
+  if (!(options.cell > 0) || !std::isfinite(options.cell)) invalid("cell", options.cell, "must be > 0");
+  if (!(options.lowerBound >= 0 && options.lowerBound <= 2)) invalid("lowerBound", options.lowerBound, "[0, 2]");
+  if (!(options.maxStepRatio >= 1 && options.maxStepRatio <= 100))
+    invalid("maxStepRatio", options.maxStepRatio, "[1, 100]");
+  if (options.maxLayers < 1) invalid("maxLayers", options.maxLayers, ">= 1");
+  if (options.maxVertices < 3) invalid("maxVertices", options.maxVertices, ">= 3");
+  if (options.start && !options.start->allFinite()) throw Error(ErrorCode::InvalidParameter, "laying option start is not finite");
+  if (options.baseDirection && !(options.baseDirection->allFinite() && options.baseDirection->norm() > 0))
+    throw Error(ErrorCode::InvalidParameter, "laying option baseDirection must be a finite non-zero vector");
+}
+
 }  // namespace
 
 double stepLowerBound(double r, double b) {
@@ -1124,8 +1142,7 @@ double stepLowerBound(double r, double b) {
 }
 
 BaseFamily parabolicBaseFamily(const Surface& surface, const LayingOptions& options) {
-  if (!(options.cell > 0) || !std::isfinite(options.cell))
-    throw Error(ErrorCode::InvalidParameter, "laying option cell must be > 0");
+  checkOptions(options);
   const SurfaceWalker walker(surface, options.cell);
   const DirectionField field(walker, parseFieldSpec(options.field));
   const std::optional<Family> family = familyAlongZeroCurvature(walker, field);
@@ -1146,20 +1163,7 @@ const char* layingMethodName(LayingMethod method) {
 
 Triangulation layTriangulation(const Surface& surface, const LayingOptions& options, const ProgressFn& progress,
                                const CancelFlag* cancel) {
-  auto invalid = [](const std::string& name, double value, const std::string& range) {
-    std::ostringstream msg;
-    msg << "laying option " << name << " = " << value << " is out of range (" << range << ")";
-    throw Error(ErrorCode::InvalidParameter, msg.str());
-  };
-  if (!(options.cell > 0) || !std::isfinite(options.cell)) invalid("cell", options.cell, "must be > 0");
-  if (!(options.lowerBound >= 0 && options.lowerBound <= 2)) invalid("lowerBound", options.lowerBound, "[0, 2]");
-  if (!(options.maxStepRatio >= 1 && options.maxStepRatio <= 100))
-    invalid("maxStepRatio", options.maxStepRatio, "[1, 100]");
-  if (options.maxLayers < 1) invalid("maxLayers", options.maxLayers, ">= 1");
-  if (options.maxVertices < 3) invalid("maxVertices", options.maxVertices, ">= 3");
-  if (options.start && !options.start->allFinite()) throw Error(ErrorCode::InvalidParameter, "laying option start is not finite");
-  if (options.baseDirection && !(options.baseDirection->allFinite() && options.baseDirection->norm() > 0))
-    throw Error(ErrorCode::InvalidParameter, "laying option baseDirection must be a finite non-zero vector");
+  checkOptions(options);
 
   const SurfaceWalker walker(surface, options.cell);
   const DirectionField field(walker, parseFieldSpec(options.field));

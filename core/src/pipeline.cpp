@@ -201,9 +201,6 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
   if (least.gaussianCurvature() < 0) candidates.push_back(least.point);
   const int trialFaces = std::clamp(faces / 2, 50, 1000);
   trial.cell = options.cell * std::sqrt(double(faces) / trialFaces);
-  double bestScore = -std::numeric_limits<double>::infinity();
-  std::optional<Vec3> best;
-  double bestVertices = 0;
   int laid = 0;
   // The score of a trial lay, or nullopt where it cannot be laid.
   auto score = [&]() -> std::optional<std::pair<double, double>> {
@@ -219,57 +216,61 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
     const double bad = double(check.invalidStars.size() + folded) / std::max<Eigen::Index>(t.mesh.V.rows(), 1);
     return std::make_pair((check.coverage >= 0 ? check.coverage : 1.0) - 5 * bad, double(t.mesh.V.rows()));
   };
-  for (const Vec3& c : candidates) {
-    trial.start = c;
-    const auto s = score();
-    if (!s) continue;
-    ++laid;
-    // The middle of the bounds (the first candidate) keeps the start unless another is clearly better: at a
-    // quarter of the size small differences are noise.
-    const double value = s->first - (laid > 1 ? 0.05 : 0.0);
-    if (value > bestScore) bestScore = value, best = c, bestVertices = s->second;
-  }
-  // Only when the family along the zero-curvature direction leaves much of the surface uncovered or invalid
-  // (a score below kPoorTrial) is the other family tried, from every candidate: on surfaces whose network
-  // contains the parabolic curves it costs no lay. On such a surface the half-size trials predict the full
-  // lay poorly (a laying that covers 44 % at half the size may cover 28 % at full size), so the two
-  // families' best starts are then laid once more at full size, and the better of those decides.
-  bool otherFamily = false;
-  if (bestScore < kPoorTrial && best && (choice.base == BaseFamily::First || choice.base == BaseFamily::Conjugate)) {
-    const BaseFamily rule = choice.base, other = rule == BaseFamily::First ? BaseFamily::Conjugate : BaseFamily::First;
-    trial.base = other;
-    std::optional<Vec3> bestOther;
-    double otherScore = -std::numeric_limits<double>::infinity(), otherVertices = 0;
+  // Every candidate laid along trial.base; the best start, its score and vertex count. The middle of the
+  // bounds (the first candidate) keeps the start unless another is clearly better: at a quarter of the size
+  // small differences are noise.
+  struct Best {
+    std::optional<Vec3> start;
+    double score = -std::numeric_limits<double>::infinity(), vertices = 0;
+  };
+  auto bestStart = [&]() {
+    Best b;
     for (const Vec3& c : candidates) {
       trial.start = c;
       const auto s = score();
       if (!s) continue;
       ++laid;
       const double value = s->first - (c == candidates.front() ? 0.0 : 0.05);
-      if (value > otherScore) otherScore = value, bestOther = c, otherVertices = s->second;
+      if (value > b.score) b = {c, value, s->second};
     }
-    if (bestOther) {
+    return b;
+  };
+  Best best = bestStart();
+  // Only when the family along the zero-curvature direction leaves much of the surface uncovered or invalid
+  // (a score below kPoorTrial) is the other family tried, from every candidate: on surfaces whose network
+  // contains the parabolic curves it costs no lay. On such a surface the half-size trials predict the full
+  // lay poorly (a laying that covers 44 % at half the size may cover 28 % at full size), so the two
+  // families' best starts are then laid once more at full size, and the better of those decides.
+  bool otherFamily = false;
+  if (best.score < kPoorTrial && best.start &&
+      (choice.base == BaseFamily::First || choice.base == BaseFamily::Conjugate)) {
+    const BaseFamily rule = choice.base, other = rule == BaseFamily::First ? BaseFamily::Conjugate : BaseFamily::First;
+    trial.base = other;
+    const Best alternative = bestStart();
+    if (alternative.start) {
       const double trialCell = trial.cell;
       trial.cell = options.cell;
-      trial.start = best;
+      trial.start = best.start;
       trial.base = rule;
       const auto full = score();
-      trial.start = bestOther;
+      trial.start = alternative.start;
       trial.base = other;
       const auto fullOther = score();
       trial.cell = trialCell;
-      if (fullOther && (!full || fullOther->first > full->first))
-        best = bestOther, bestVertices = otherVertices, otherFamily = true;
+      if (fullOther && (!full || fullOther->first > full->first)) {
+        best = alternative;
+        choice.base = other;
+        otherFamily = true;
+      }
     }
   }
-  if (otherFamily) choice.base = choice.base == BaseFamily::First ? BaseFamily::Conjugate : BaseFamily::First;
-  if ((laid < 2 && !otherFamily) || !best) return choice;  // nothing to choose between: the default start
-  choice.start = best;
+  if ((laid < 2 && !otherFamily) || !best.start) return choice;  // nothing to choose between: the default start
+  choice.start = best.start;
   choice.trialCell = trial.cell;
-  choice.trialVertices = bestVertices;
+  choice.trialVertices = best.vertices;
   std::ostringstream s;
   s << "start chosen among " << laid << " candidates by trial lays at about " << trialFaces << " faces: near ("
-    << best->x() << ", " << best->y() << ", " << best->z() << ")";
+    << best.start->x() << ", " << best.start->y() << ", " << best.start->z() << ")";
   if (otherFamily)
     s << "; rows along the family across the zero-curvature direction, which laid better than the family along "
          "it (no singularity-free network contains these parabolic curves)";
