@@ -12,6 +12,7 @@
 #include "phex/dupin.hpp"
 #include "phex/error.hpp"
 #include "phex/ideal_triangle.hpp"
+#include "phex/mesh_surface.hpp"
 
 namespace phex {
 namespace {
@@ -23,16 +24,25 @@ constexpr double kMinConjugateSine = 0.15;
 constexpr double kNearParabolic = 0.1;  // kmin / kmax below which a point counts as near a parabolic curve
 constexpr double kResampleBelow = 0.55, kResampleAbove = 1.8;  // row spacing / cell that triggers a resample
 constexpr double kResampleLimit = 2.5;  // ... even at a parabolic curve
+// A row counts as at a parabolic curve for resampling where kmin / kmax is below this (on a fifth of it): the
+// pentagons and heptagons a resample leaves fold as Dupin hexagons even a little off the curve. At 0.1
+// (kNearParabolic) a sampled 12k-triangle torus folded 4-5 faces at 700, 800 and 900 faces and the analytic
+// torus (Method 2) 12 at 1500; at 0.2 none, and the uploaded cyclide converges at 10 of 12 sizes (was 8).
+constexpr double kResampleParabolic = 0.2;
 constexpr double kValidMargin = 1.1;  // Method 2 keeps the apexes this far above DE (in units of validStep)
 constexpr double kZipGap = 1.6;       // fronts facing each other closer than this many steps are zipped
-// The open rows of L0's two fronts facing each other closer than this many of their steps share out the gap
-// between them: it is laid in whole layers of equal height no lower than a step (zipIfMeeting), the last one
-// zipped. Full steps would leave whatever remains for the zip, down to slivers, whose stars (K < 0 in
-// particular) and Dupin hexagons fold. Closed rows (loops around a tube) and split fronts keep kZipGap.
+// The rows of L0's two fronts (both open or both closed) facing each other closer than this many of their steps
+// share out the gap between them: it is laid in whole layers of equal height no lower than a step
+// (zipIfMeeting), the last one zipped. Full steps would leave whatever remains for the zip, down to slivers,
+// whose stars (K < 0 in particular) and Dupin hexagons fold. Split fronts keep kZipGap.
 constexpr double kMeetReach = 3.5;
 constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
 constexpr double kEllFirst = 1.5;     // ... at first only this many: further where no crossing is found
 constexpr int kParabolicSamples = 400;  // samples of the surface that vote for the base family at parabolic curves
+// Method 1 smooths its apex offsets once per layer at about this many faces, more often at finer cells (see
+// progressiveApexes). Measured over ten surfaces at 1k-30k faces: 2500 left the cyclide 106 / 261 invalid
+// stars at 10k / 30k faces, 800 gives 53 / 119 (300 no better: 62 / 109), and at 1000 faces one pass as before.
+constexpr int kSmoothingFaces = 800;
 
 const char* const kAsymptoticBase =
     "the base curve runs (almost) along an asymptotic direction, which is self-conjugate (§4.2, Prop. 5), so no "
@@ -170,6 +180,14 @@ class PointGrid {
   std::unordered_map<std::int64_t, std::vector<int>> cells_;
 };
 
+// Passes of Method 1's (1, 2, 1) / 4 smoothing per layer at `cell`: one at about kSmoothingFaces faces, and
+// growing as 1 / cell. A Surface other than a mesh or a parametric one (whose area is not known) gets one.
+int progressiveSmoothingPasses(const Surface& surface, double cell) {
+  if (!dynamic_cast<const MeshSurface*>(&surface) && !dynamic_cast<const ParametricSurface*>(&surface)) return 1;
+  const double passes = cellForFaceCount(surface, kSmoothingFaces) / cell;
+  return static_cast<int>(std::clamp(std::lround(passes), 1L, 64L));
+}
+
 // Where a curve crosses the short flow line l (both on the surface), found in the tangent plane at l's start.
 struct Crossing {
   double ellArc;   // arc length along l
@@ -188,7 +206,9 @@ class Laying {
         G_(baseFamily == Family::First ? Family::Conjugate : Family::First),
         progress_(progress),
         cancel_(cancel),
-        grid_(options.cell) {}
+        grid_(options.cell),
+        smoothingPasses_(options.method == LayingMethod::Progressive ? progressiveSmoothingPasses(walker.surface(), options.cell)
+                                                                     : 1) {}
 
   Triangulation run(const SurfacePoint& start, const Vec3& initial);
 
@@ -230,6 +250,7 @@ class Laying {
   std::vector<char> inBase_;         // vertices of the row being laid from (exempt from the collision test)
   std::vector<Eigen::Vector3i> triangles_;
   PointGrid grid_;
+  const int smoothingPasses_;  // of the apex offsets per layer, Method 1
   std::vector<Front> fronts_;
   std::vector<std::vector<Vec3>> fieldLines_;
   mutable std::vector<Vec2> ellPlane_;  // crossCurve's scratch: l in the tangent plane
@@ -405,23 +426,35 @@ bool Laying::collides(const Vec3& p, double radius) const {
 }
 
 // Method 1 (§5.2, Fig. 14): the ideal apex in the tangent plane at M_i, projected onto the surface.
-// Laying conjugate rows forward is a Cauchy problem, ill-posed where K > 0: wobble at the sample spacing
-// (round-off, projection) grows from layer to layer. The apex offsets M_i -> C_i are therefore smoothed along
-// the row with weights (1, 2, 1) / 4, which removes that wobble and leaves smooth variations (rotated copies
-// on a surface of revolution) nearly untouched.
+// Laying conjugate rows forward is a Cauchy problem, ill-posed where K > 0: a wobble of the rows grows from
+// layer to layer, the faster the shorter its wavelength (about e^(2 pi d / wavelength) over a distance d).
+// The apex offsets M_i -> C_i are therefore smoothed along the row with weights (1, 2, 1) / 4, which leaves
+// smooth variations (rotated copies on a surface of revolution) nearly untouched. One pass per layer damps
+// a given wavelength less, the finer the cell (and the more layers cross the same distance), so the passes
+// grow as 1 / cell (progressiveSmoothingPasses): the damping per unit distance stays that of one pass at
+// about kSmoothingFaces faces. One pass only, on a torus laid at 4x as many faces, the two fronts arrive
+// at the outer equator scalloped, with rows split and 180 invalid stars (694 layers); with 4 passes they meet
+// level and zip with valence 6 kept (177 layers, 0 invalid stars).
 std::vector<std::optional<Apex>> Laying::progressiveApexes(const Row& row, const std::vector<Segment>& segments) const {
   const int n = static_cast<int>(segments.size());
   std::vector<std::optional<Apex>> apexes(n);
   auto usable = [&](int i) { return i >= 0 && i < n && !segments[i].asymptotic && !segments[i].degenerate; };
+  std::vector<Vec3> offset(n, Vec3::Zero()), smoothed(n);
+  for (int i = 0; i < n; ++i)
+    if (usable(i)) offset[i] = segments[i].apexInPlane - segments[i].M.point();
+  for (int pass = 0; pass < smoothingPasses_; ++pass) {
+    smoothed = offset;
+    for (int i = 0; i < n; ++i) {
+      const int before = row.closed ? (i + n - 1) % n : i - 1, after = row.closed ? (i + 1) % n : i + 1;
+      if (usable(i) && usable(before) && usable(after))
+        smoothed[i] = 0.5 * offset[i] + 0.25 * (offset[before] + offset[after]);
+    }
+    offset.swap(smoothed);
+  }
   for (int i = 0; i < n; ++i) {
     const Segment& s = segments[i];
-    if (s.asymptotic || s.degenerate) continue;
-    const int before = row.closed ? (i + n - 1) % n : i - 1, after = row.closed ? (i + 1) % n : i + 1;
-    Vec3 offset = s.apexInPlane - s.M.point();
-    if (usable(before) && usable(after))
-      offset = 0.5 * offset + 0.25 * (segments[before].apexInPlane - segments[before].M.point() +
-                                      segments[after].apexInPlane - segments[after].M.point());
-    const Vec3 x = s.M.point() + offset;
+    if (!usable(i)) continue;
+    const Vec3 x = s.M.point() + offset[i];
     const SurfacePoint p = walker_.project(x, s.M);
     if (!walker_.isOutside(x, p)) apexes[i] = Apex{p, s.ratio, 0.0};
   }
@@ -764,11 +797,13 @@ std::optional<double> Laying::facingGap(const Front& a, const Front& b, bool& st
   return gaps[gaps.size() / 2];
 }
 
-// Zips front f to a front facing it. Closed rows (the loops of a tube meet level and whole) and the rows of split
-// fronts are zipped to the first front within kZipGap steps. The open rows of L0's two fronts, neither split
-// (going round a surface closed across L0, they meet at its seam), are zipped when the gap between them is about
-// one layer high; when it is a few layers high, stepScale receives the factor that makes them equal, for f's
-// next layer (else 1).
+// Zips front f to a front facing it. The rows of split fronts, and an open row meeting a closed one, are zipped
+// to the first front within kZipGap steps. L0's two fronts, neither split, both open (going round a surface
+// closed across L0, they meet at its seam) or both closed (loops around a tube, meeting on its far side), are
+// zipped when the gap between them is about one layer high; when it is a few layers high, stepScale receives
+// the factor that makes them equal, for f's next layer (else 1). Closed loops met at whatever gap was left
+// before (kZipGap): on the uploaded torus at 1000 faces that left 24 self-intersecting faces (0 now), and by
+// Method 1 on the torus at cell 0.035 a strip of apexes dropped as overlapping instead of a zip.
 bool Laying::zipIfMeeting(std::size_t f, double& stepScale) {
   stepScale = 1;
   std::size_t nearest = fronts_.size();
@@ -777,7 +812,7 @@ bool Laying::zipIfMeeting(std::size_t f, double& stepScale) {
   const bool unsplit = fronts_.size() == 2;  // the two fronts of L0, neither split yet
   for (std::size_t k = 0; k < fronts_.size() && gap > 0; ++k) {
     if (k == f || !fronts_[k].active) continue;
-    if (!unsplit || fronts_[f].row.closed || fronts_[k].row.closed) {
+    if (!unsplit || fronts_[f].row.closed != fronts_[k].row.closed) {
       if (facing(fronts_[f], fronts_[k])) gap = 0, nearest = k;
       continue;
     }
@@ -963,7 +998,7 @@ void Laying::layLayer(std::size_t f, double stepScale) {
     int parabolic = 0;
     for (const Apex& a : run) {
       const double kmax = std::max(std::abs(a.p.g.k1), std::abs(a.p.g.k2));
-      parabolic += kmax > 0 && std::min(std::abs(a.p.g.k1), std::abs(a.p.g.k2)) < kNearParabolic * kmax;
+      parabolic += kmax > 0 && std::min(std::abs(a.p.g.k1), std::abs(a.p.g.k2)) < kResampleParabolic * kmax;
     }
     const bool atParabolic = 5 * parabolic > length && spacing < kResampleLimit * o_.cell;
     if (curveUsable && !atParabolic && (spacing < kResampleBelow * o_.cell || spacing > kResampleAbove * o_.cell)) {
