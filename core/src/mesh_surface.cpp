@@ -7,8 +7,6 @@
 #include <limits>
 #include <numeric>
 
-#include <Eigen/Cholesky>
-
 #include "phex/error.hpp"
 
 namespace phex {
@@ -18,19 +16,59 @@ namespace {
   throw Error(ErrorCode::InvalidInput, "mesh '" + name + "': " + what);
 }
 
+// Sums in a fixed order. Eigen's reductions (dot, norm, products) add in an order that depends on its SIMD
+// path: with SSE2 (native) a 3-vector's dot product can come out as (x + y) + z, without SIMD (WebAssembly)
+// as x + (y + z). Written out, every platform rounds alike.
+inline double dot(const Vec3& a, const Vec3& b) { return a.x() * b.x() + a.y() * b.y() + a.z() * b.z(); }
+inline double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
+inline Vec3 normalized(const Vec3& a) {
+  const double n = norm(a);
+  return n > 0 ? Vec3(a / n) : a;
+}
+inline Vec3 times(const Eigen::Matrix3d& M, const Vec3& v) {
+  return Vec3(M(0, 0) * v.x() + M(0, 1) * v.y() + M(0, 2) * v.z(), M(1, 0) * v.x() + M(1, 1) * v.y() + M(1, 2) * v.z(),
+              M(2, 0) * v.x() + M(2, 1) * v.y() + M(2, 2) * v.z());
+}
+// Eigen's unitOrthogonal() for 3-vectors, with the norms summed in a fixed order.
+inline Vec3 unitOrthogonal(const Vec3& n) {
+  if (!(std::abs(n.x()) <= std::abs(n.z()) * 1e-12) || !(std::abs(n.y()) <= std::abs(n.z()) * 1e-12)) {
+    const double inverse = 1 / std::sqrt(n.x() * n.x() + n.y() * n.y());
+    return Vec3(-n.y() * inverse, n.x() * inverse, 0);
+  }
+  const double inverse = 1 / std::sqrt(n.y() * n.y() + n.z() * n.z());
+  return Vec3(0, -n.z() * inverse, n.y() * inverse);
+}
+
 // Principal curvatures and directions of the shape tensor T restricted to the tangent plane of `normal`.
-// The 2x2 symmetric eigenproblem is solved in closed form, so the result is the same on every platform.
+// The 2x2 symmetric eigenproblem is solved in closed form with +, -, *, / and sqrt alone (correctly rounded
+// everywhere, unlike libm's hypot, atan2, cos and sin), so the result is the same on every platform.
 LocalGeometry principalFrame(const Vec3& point, const Vec3& normal, const Eigen::Matrix3d& T) {
   LocalGeometry g;
   g.point = point;
   g.normal = normal;
-  const Vec3 u = normal.unitOrthogonal(), v = normal.cross(u);
-  const double a = u.dot(T * u), c = v.dot(T * v), b = 0.5 * (u.dot(T * v) + v.dot(T * u));
-  const double mean = 0.5 * (a + c), radius = std::hypot(0.5 * (a - c), b);
+  const Vec3 u = unitOrthogonal(normal), v = normal.cross(u);
+  const Vec3 Tu = times(T, u), Tv = times(T, v);
+  const double a = dot(u, Tu), c = dot(v, Tv), b = 0.5 * (dot(u, Tv) + dot(v, Tu));
+  const double half = 0.5 * (a - c);
+  const double mean = 0.5 * (a + c), radius = std::sqrt(half * half + b * b);
   g.k1 = mean + radius;
   g.k2 = mean - radius;
-  const double angle = 0.5 * std::atan2(2 * b, a - c);  // direction of the larger eigenvalue
-  g.d1 = std::cos(angle) * u + std::sin(angle) * v;
+  // The direction of the larger eigenvalue, at angle t = atan2(2 b, a - c) / 2 in (-pi/2, pi/2] from u:
+  // with X = a - c, Y = 2 b, R = |(X, Y)|, by the half-angle formulas cos t = (R + X) / s, sin t = Y / s
+  // with s = sqrt(2 R (R + X)) where X >= 0, and cos t = |Y| / s, sin t = +-(R - X) / s with
+  // s = sqrt(2 R (R - X)) where X < 0 (no cancellation either way). R = 0 (umbilic): u.
+  const double X = a - c, Y = 2 * b, R = 2 * radius;
+  double cosT = 1, sinT = 0;
+  if (X >= 0) {
+    if (R > 0) {
+      const double s = std::sqrt(2 * R * (R + X));
+      cosT = (R + X) / s, sinT = Y / s;
+    }
+  } else {
+    const double s = std::sqrt(2 * R * (R - X));
+    cosT = std::abs(Y) / s, sinT = std::copysign((R - X) / s, Y);
+  }
+  g.d1 = cosT * u + sinT * v;
   g.d2 = normal.cross(g.d1);
   return g;
 }
@@ -39,10 +77,10 @@ LocalGeometry principalFrame(const Vec3& point, const Vec3& normal, const Eigen:
 // Detection, 5.1.5): the Voronoi regions of the vertices, then of the edges, then the face.
 Vec3 closestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
   if (d1 <= 0 && d2 <= 0) return Vec3(1, 0, 0);
   const Vec3 bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
   if (d3 >= 0 && d4 <= d3) return Vec3(0, 1, 0);
   const double vc = d1 * d4 - d3 * d2;
   if (vc <= 0 && d1 >= 0 && d3 <= 0) {
@@ -50,7 +88,7 @@ Vec3 closestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3&
     return Vec3(1 - t, t, 0);
   }
   const Vec3 cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
   if (d6 >= 0 && d5 <= d6) return Vec3(0, 0, 1);
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) {
@@ -67,6 +105,184 @@ Vec3 closestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3&
   return Vec3(1 - v - w, v, w);
 }
 
+// exp(-t) for t in [0, 1] from + and * alone, so that every platform rounds it alike (libm's exp differs
+// between glibc and musl in the last bit): exp(-t / 8) by its Taylor polynomial to degree 10 (truncation
+// below 3e-18 relative), squared three times. Within a few ulps of std::exp.
+inline double expMinus(double t) {
+  const double s = -0.125 * t;
+  double e = 1.0 / 3628800;
+  e = e * s + 1.0 / 362880;
+  e = e * s + 1.0 / 40320;
+  e = e * s + 1.0 / 5040;
+  e = e * s + 1.0 / 720;
+  e = e * s + 1.0 / 120;
+  e = e * s + 1.0 / 24;
+  e = e * s + 1.0 / 6;
+  e = e * s + 0.5;
+  e = e * s + 1;
+  e = e * s + 1;
+  e *= e;
+  e *= e;
+  return e * e;
+}
+
+// Eigen's LDLT (diagonal pivoting, the same zero-pivot rules) and its rcond estimate (Hager and Higham's
+// 1-norm estimator, as Eigen::internal::rcond_invmatrix_L1_norm_estimate), written out for a fixed small
+// size over plain arrays: Eigen 3.4 has no WebAssembly SIMD, and its reductions sum in a different order
+// with SSE2 than without, so this scalar code is both faster in wasm and identical on every platform.
+// Only the lower triangle a[i][j], i >= j, is read and written.
+template <int m>
+struct SmallLdlt {
+  double a[m][m];  // L below the diagonal (unit diagonal implied), D on it
+  int transposition[m];
+  double l1Norm = 0;
+
+  // Factors the symmetric matrix whose upper triangle is `upper` (upper[j][i], i >= j); false where Eigen
+  // reports NumericalIssue.
+  bool compute(const double (&upper)[m][m]) {
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j <= i; ++j) a[i][j] = upper[j][i];
+    l1Norm = 0;
+    for (int c = 0; c < m; ++c) {
+      double sum = 0;
+      for (int i = c; i < m; ++i) sum += std::abs(a[i][c]);
+      for (int j = 0; j < c; ++j) sum += std::abs(a[c][j]);
+      if (sum > l1Norm) l1Norm = sum;
+    }
+    bool foundZeroPivot = false, ok = true;
+    double temp[m];
+    for (int k = 0; k < m; ++k) {
+      int p = k;  // the largest diagonal entry left (the first of equals)
+      double biggest = std::abs(a[k][k]);
+      for (int i = k + 1; i < m; ++i)
+        if (std::abs(a[i][i]) > biggest) biggest = std::abs(a[i][i]), p = i;
+      transposition[k] = p;
+      if (p != k) {
+        for (int j = 0; j < k; ++j) std::swap(a[k][j], a[p][j]);
+        for (int i = p + 1; i < m; ++i) std::swap(a[i][k], a[i][p]);
+        std::swap(a[k][k], a[p][p]);
+        for (int i = k + 1; i < p; ++i) std::swap(a[i][k], a[p][i]);
+      }
+      if (k > 0) {
+        for (int j = 0; j < k; ++j) temp[j] = a[j][j] * a[k][j];
+        double dot = 0;
+        for (int j = 0; j < k; ++j) dot += a[k][j] * temp[j];
+        a[k][k] -= dot;
+        for (int i = k + 1; i < m; ++i) {
+          double s = 0;
+          for (int j = 0; j < k; ++j) s += a[i][j] * temp[j];
+          a[i][k] -= s;
+        }
+      }
+      const double akk = a[k][k];
+      const bool valid = std::abs(akk) > 0;
+      if (k == 0 && !valid) {  // a zero diagonal: Eigen succeeds only for the zero matrix (rcond 0 then)
+        for (int j = 0; j < m; ++j) transposition[j] = j;
+        return false;
+      }
+      if (valid) {
+        for (int i = k + 1; i < m; ++i) a[i][k] /= akk;
+      } else {
+        for (int i = k + 1; i < m; ++i) ok = ok && a[i][k] == 0;
+      }
+      if (foundZeroPivot && valid) ok = false;
+      else if (!valid) foundZeroPivot = true;
+    }
+    return ok;
+  }
+
+  // x = A^-1 x in place (A symmetric: also A^-T).
+  void solveInPlace(double (&x)[m]) const {
+    for (int k = 0; k < m; ++k) std::swap(x[k], x[transposition[k]]);
+    for (int i = 1; i < m; ++i) {
+      double s = 0;
+      for (int j = 0; j < i; ++j) s += a[i][j] * x[j];
+      x[i] -= s;
+    }
+    for (int i = 0; i < m; ++i) x[i] = std::abs(a[i][i]) > std::numeric_limits<double>::min() ? x[i] / a[i][i] : 0.0;
+    for (int i = m - 2; i >= 0; --i) {
+      double s = 0;
+      for (int j = i + 1; j < m; ++j) s += a[j][i] * x[j];
+      x[i] -= s;
+    }
+    for (int k = m - 1; k >= 0; --k) std::swap(x[k], x[transposition[k]]);
+  }
+
+  static double norm1(const double (&x)[m]) {
+    double s = 0;
+    for (int i = 0; i < m; ++i) s += std::abs(x[i]);
+    return s;
+  }
+
+  // An upper bound on ||A^-1||_1 = ||P^T L^-T D^-1 L^-1 P||_1 <= ||L^-1||_inf max|1 / d_i| ||L^-1||_1, from
+  // L^-1 (cheaper than the estimator's solves). Every estimate of rcond() is at least 1 / (||A||_1 times it).
+  double inverseNormBound() const {
+    double x[m][m];  // L^-1, unit lower triangular
+    for (int j = 0; j < m; ++j) {
+      for (int i = j + 1; i < m; ++i) {
+        double s = a[i][j];
+        for (int k = j + 1; k < i; ++k) s += a[i][k] * x[k][j];
+        x[i][j] = -s;
+      }
+    }
+    double rowMax = 1, columnMax = 1, dMin = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < m; ++i) {
+      double row = 1, column = 1;
+      for (int j = 0; j < i; ++j) row += std::abs(x[i][j]);
+      for (int k = i + 1; k < m; ++k) column += std::abs(x[k][i]);
+      rowMax = std::max(rowMax, row), columnMax = std::max(columnMax, column);
+      dMin = std::min(dMin, std::abs(a[i][i]));
+    }
+    return rowMax * columnMax / dMin;
+  }
+
+  // rcond() > threshold, deciding from the bound above where it suffices (a margin of 2 covers the
+  // estimator's own round-off), else from the estimate.
+  bool rcondAbove(double threshold) const {
+    if (l1Norm > 0 && 1 / (l1Norm * inverseNormBound()) > 2 * threshold) return true;
+    return rcond() > threshold;
+  }
+
+  // Eigen's LDLT::rcond(): 1 / (||A||_1 * an estimate of ||A^-1||_1 from below).
+  double rcond() const {
+    if (l1Norm == 0) return 0;
+    double v[m], sign[m], oldSign[m] = {};
+    for (int i = 0; i < m; ++i) v[i] = 1.0 / m;
+    solveInPlace(v);
+    double lower = norm1(v), oldLower = lower;
+    int oldIndex = -1;
+    for (int k = 0; k < 4; ++k) {
+      bool same = k > 0;
+      for (int i = 0; i < m; ++i) {
+        sign[i] = v[i] < 0 ? -1.0 : 1.0;
+        same = same && sign[i] == oldSign[i];
+      }
+      if (same) break;
+      for (int i = 0; i < m; ++i) v[i] = sign[i];
+      solveInPlace(v);
+      int index = 0;
+      for (int i = 1; i < m; ++i)
+        if (std::abs(v[i]) > std::abs(v[index])) index = i;
+      if (index == oldIndex) break;
+      for (int i = 0; i < m; ++i) v[i] = i == index ? 1.0 : 0.0;
+      solveInPlace(v);
+      lower = norm1(v);
+      if (lower <= oldLower) break;
+      for (int i = 0; i < m; ++i) oldSign[i] = sign[i];
+      oldIndex = index;
+      oldLower = lower;
+    }
+    double alternating = 1;
+    for (int i = 0; i < m; ++i) {
+      v[i] = alternating * (1 + static_cast<double>(i) / (m - 1));
+      alternating = -alternating;
+    }
+    solveInPlace(v);
+    const double inverseNorm = std::max(lower, (2 * norm1(v)) / (3.0 * m));
+    return inverseNorm == 0 ? 0 : (1 / inverseNorm) / l1Norm;
+  }
+};
+
 // A jet z(x, y) fitted around a vertex: the normal and the 3D shape tensor it gives at the vertex.
 struct JetFit {
   bool ok = false;
@@ -78,7 +294,7 @@ struct JetFit {
 // trial normal), weighted by a Gaussian of the distance. The fitted surface is a graph (x, y, f(x, y)):
 // with J = [X_x X_y], metric G = J^T J and second fundamental form B = -Hess f / sqrt(1 + |grad f|^2)
 // (sign: k > 0 bending away from the normal), the shape tensor on 3D tangent vectors is
-// J G^-1 B G^-1 J^T.
+// J G^-1 B G^-1 J^T. Plain loops over fixed-size arrays (the normal equations' lower triangle only).
 template <int m>  // 10 coefficients: cubic; 6: quadratic (fixed sizes: no allocation per vertex)
 JetFit fitJet(const std::vector<Vec3>& local) {
   JetFit fit;
@@ -88,31 +304,48 @@ JetFit fitJet(const std::vector<Vec3>& local) {
   for (const Vec3& q : local) radius2 = std::max(radius2, q.x() * q.x() + q.y() * q.y());
   if (!(radius2 > 0)) return fit;
   const double scale = 1 / std::sqrt(radius2);  // monomials of x / h keep the normal equations well conditioned
-  Eigen::Matrix<double, m, m> A = Eigen::Matrix<double, m, m>::Zero();
-  Eigen::Matrix<double, m, 1> rhs = Eigen::Matrix<double, m, 1>::Zero();
-  for (int i = 0; i < n; ++i) {
-    const double x = local[i].x() * scale, y = local[i].y() * scale;
-    const double all[10] = {1, x, y, x * x, x * y, y * y, x * x * x, x * x * y, x * y * y, y * y * y};
-    const Eigen::Map<const Eigen::Matrix<double, m, 1>> row(all);
-    const double w = std::exp(-(x * x + y * y));  // nearer points count more: the jet is a local model
-    A.template selfadjointView<Eigen::Lower>().rankUpdate(row, w);
-    rhs += (w * local[i].z() * scale) * row;
+  double A[m][m], rhs[m];  // the normal equations, upper triangle A[j][i], i >= j (rows contiguous)
+  for (int i = 0; i < m; ++i) {
+    rhs[i] = 0;
+    for (int j = i; j < m; ++j) A[i][j] = 0;
   }
-  const Eigen::LDLT<Eigen::Matrix<double, m, m>, Eigen::Lower> ldlt(A);
-  if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-10)) return fit;
-  const Eigen::Matrix<double, m, 1> c = ldlt.solve(rhs);
+  constexpr int kBlock = 32;  // the weights of a block first: independent, they pipeline
+  double weight[kBlock];
+  for (int begin = 0; begin < n; begin += kBlock) {
+    const int end = std::min(n, begin + kBlock);
+    for (int k = begin; k < end; ++k) {
+      const double x = local[k].x() * scale, y = local[k].y() * scale;
+      weight[k - begin] = expMinus(x * x + y * y);  // nearer points count more: the jet is a local model
+    }
+    for (int k = begin; k < end; ++k) {
+      const double x = local[k].x() * scale, y = local[k].y() * scale, w = weight[k - begin];
+      const double row[10] = {1, x, y, x * x, x * y, y * y, x * x * x, x * x * y, x * y * y, y * y * y};
+      const double wz = w * local[k].z() * scale;
+      for (int j = 0; j < m; ++j) {
+        const double wj = w * row[j];
+        for (int i = j; i < m; ++i) A[j][i] += wj * row[i];
+        rhs[j] += wz * row[j];
+      }
+    }
+  }
+  SmallLdlt<m> ldlt;
+  if (!ldlt.compute(A) || !ldlt.rcondAbove(1e-10)) return fit;
+  double* c = rhs;
+  ldlt.solveInPlace(rhs);
   // Back to unscaled derivatives at the origin: f_x = c1, f_xx = 2 c3 s, ... (z was scaled too).
-  const double fx = c(1), fy = c(2), fxx = 2 * c(3) * scale, fxy = c(4) * scale, fyy = 2 * c(5) * scale;
-  Eigen::Matrix<double, 3, 2> J;
-  J << 1, 0, 0, 1, fx, fy;
-  const double root = std::sqrt(1 + fx * fx + fy * fy);
-  Eigen::Matrix2d B;
-  B << -fxx, -fxy, -fxy, -fyy;
-  B /= root;
-  const Eigen::Matrix2d Ginv = (J.transpose() * J).inverse();
-  fit.tensor = J * Ginv * B * Ginv * J.transpose();
+  const double fx = c[1], fy = c[2], fxx = 2 * c[3] * scale, fxy = c[4] * scale, fyy = 2 * c[5] * scale;
+  // G = J^T J = I + g g^T with g = (fx, fy), det G = 1 + |g|^2; M = G^-1 B G^-1; tensor = J M J^T.
+  const double det = 1 + fx * fx + fy * fy, root = std::sqrt(det);
+  const double b00 = -fxx / root, b01 = -fxy / root, b11 = -fyy / root;
+  const double g00 = (1 + fy * fy) / det, g01 = -(fx * fy) / det, g11 = (1 + fx * fx) / det;
+  const double h00 = g00 * b00 + g01 * b01, h01 = g00 * b01 + g01 * b11;  // H = G^-1 B
+  const double h10 = g01 * b00 + g11 * b01, h11 = g01 * b01 + g11 * b11;
+  const double m00 = h00 * g00 + h01 * g01, m01 = h00 * g01 + h01 * g11;  // M = H G^-1 (symmetric)
+  const double m11 = h10 * g01 + h11 * g11;
+  const double j0[2] = {m00 * fx + m01 * fy, m01 * fx + m11 * fy};  // M g
+  fit.tensor << m00, m01, j0[0], m01, m11, j0[1], j0[0], j0[1], fx * j0[0] + fy * j0[1];
   fit.normal = Vec3(-fx, -fy, 1) / root;
-  fit.ok = std::isfinite(fit.tensor.sum()) && fit.normal.allFinite();
+  fit.ok = fit.tensor.allFinite() && fit.normal.allFinite();
   return fit;
 }
 
@@ -226,24 +459,29 @@ void MeshSurface::estimateCurvature() {
       if (patch.size() == ringEnd || (rings >= 2 && static_cast<int>(patch.size()) >= kMinJetPoints)) break;
     }
     const Vec3 p = mesh_.V.row(v);
-    Vec3 normal = trialNormal[v].norm() > 0 ? trialNormal[v].normalized() : Vec3::UnitZ();
+    Vec3 normal = norm(trialNormal[v]) > 0 ? normalized(trialNormal[v]) : Vec3::UnitZ();
     Eigen::Matrix3d tensor = Eigen::Matrix3d::Zero();
     // Two passes at most: a fit whose normal is far from the trial normal is refitted in its own frame.
     for (int pass = 0; pass < 2; ++pass) {
-      const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
+      const Vec3 t1 = unitOrthogonal(normal), t2 = normal.cross(t1);
       local.clear();
       for (int w : patch) {
         const Vec3 d = Vec3(mesh_.V.row(w)) - p;
-        local.emplace_back(d.dot(t1), d.dot(t2), d.dot(normal));
+        local.emplace_back(dot(d, t1), dot(d, t2), dot(d, normal));
       }
       JetFit fit = fitJet<10>(local);
       if (!fit.ok) fit = fitJet<6>(local);
       if (!fit.ok) break;  // too few points (a tiny mesh): keep the trial normal, zero curvature
       Eigen::Matrix3d R;
       R << t1, t2, normal;
-      tensor = R * fit.tensor * R.transpose();
-      const Vec3 fitted = R * fit.normal;
-      const bool refit = fitted.dot(normal) < 0.995;  // about 6 degrees
+      // tensor = R fit.tensor R^T, fitted = R fit.normal, summed in a fixed order.
+      Eigen::Matrix3d RT;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) RT(i, j) = R(i, 0) * fit.tensor(0, j) + R(i, 1) * fit.tensor(1, j) + R(i, 2) * fit.tensor(2, j);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) tensor(i, j) = RT(i, 0) * R(j, 0) + RT(i, 1) * R(j, 1) + RT(i, 2) * R(j, 2);
+      const Vec3 fitted = times(R, fit.normal);
+      const bool refit = dot(fitted, normal) < 0.995;  // about 6 degrees
       normal = fitted;
       if (!refit) break;
     }
@@ -261,20 +499,25 @@ LocalGeometry MeshSurface::geometryInTriangle(int f, const Vec3& barycentric) co
     normal += barycentric(k) * vertexGeometry_[v].normal;
     tensor += barycentric(k) * shapeTensor_[v];
   }
-  if (!(normal.norm() > 1e-12)) {  // opposite vertex normals (a fold): use the triangle's own normal
+  if (!(norm(normal) > 1e-12)) {  // opposite vertex normals (a fold): use the triangle's own normal
     const Vec3 a = mesh_.V.row(mesh_.F(f, 0)), b = mesh_.V.row(mesh_.F(f, 1)), c = mesh_.V.row(mesh_.F(f, 2));
     normal = (b - a).cross(c - a);
   }
-  return principalFrame(point, normal.normalized(), tensor);
+  return principalFrame(point, normalized(normal), tensor);
 }
 
 void MeshSurface::buildTree() {
   const int nf = static_cast<int>(mesh_.F.rows());
-  std::vector<Vec3> centroid(nf);
-  for (int f = 0; f < nf; ++f)
-    centroid[f] = (mesh_.V.row(mesh_.F(f, 0)) + mesh_.V.row(mesh_.F(f, 1)) + mesh_.V.row(mesh_.F(f, 2))).transpose() / 3;
-  triangleOrder_.resize(nf);
-  std::iota(triangleOrder_.begin(), triangleOrder_.end(), 0);
+  // The triangles' centroids with their ids, contiguous: the median splits partition this array in place.
+  struct Item {
+    double centre[3];
+    int f;
+  };
+  std::vector<Item> items(nf);
+  for (int f = 0; f < nf; ++f) {
+    const Vec3 c = (mesh_.V.row(mesh_.F(f, 0)) + mesh_.V.row(mesh_.F(f, 1)) + mesh_.V.row(mesh_.F(f, 2))).transpose() / 3;
+    items[f] = {{c.x(), c.y(), c.z()}, f};
+  }
   nodes_.clear();
   nodes_.reserve(static_cast<std::size_t>(nf));
   nodes_.emplace_back();
@@ -286,24 +529,26 @@ void MeshSurface::buildTree() {
   while (!tasks.empty()) {
     const Task t = tasks.back();
     tasks.pop_back();
-    Box3 box, centres;
-    for (int i = t.begin; i < t.end; ++i) {
-      const int f = triangleOrder_[i];
-      for (int k = 0; k < 3; ++k) box.extend(Vec3(mesh_.V.row(mesh_.F(f, k)).transpose()));
-      centres.extend(centroid[f]);
-    }
-    nodes_[t.node].box = box;
     if (t.end - t.begin <= kLeafSize) {
       nodes_[t.node].first = t.begin;
       nodes_[t.node].count = t.end - t.begin;
       continue;
     }
     // Median split along the longest side of the centroids' box: a balanced tree, depth log2(#F / 4).
-    int axis;
-    centres.sizes().maxCoeff(&axis);
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) lo[a] = hi[a] = items[t.begin].centre[a];
+    for (int i = t.begin + 1; i < t.end; ++i)
+      for (int a = 0; a < 3; ++a) {
+        const double x = items[i].centre[a];
+        lo[a] = x < lo[a] ? x : lo[a];
+        hi[a] = x > hi[a] ? x : hi[a];
+      }
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+      if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
     const int mid = (t.begin + t.end) / 2;
-    std::nth_element(triangleOrder_.begin() + t.begin, triangleOrder_.begin() + mid, triangleOrder_.begin() + t.end,
-                     [&](int a, int b) { return centroid[a](axis) < centroid[b](axis); });
+    std::nth_element(items.begin() + t.begin, items.begin() + mid, items.begin() + t.end,
+                     [axis](const Item& a, const Item& b) { return a.centre[axis] < b.centre[axis]; });
     const int left = static_cast<int>(nodes_.size());
     nodes_[t.node].first = left;
     nodes_[t.node].count = 0;
@@ -312,12 +557,27 @@ void MeshSurface::buildTree() {
     tasks.push_back({left, t.begin, mid});
     tasks.push_back({left + 1, mid, t.end});
   }
+  triangleOrder_.resize(nf);
+  for (int i = 0; i < nf; ++i) triangleOrder_[i] = items[i].f;
+  // Boxes bottom-up (children come after their parent): each leaf's from its triangles' corners, each
+  // inner node's the union of its children's — the same boxes as scanning every subtree's triangles.
+  for (int n = static_cast<int>(nodes_.size()) - 1; n >= 0; --n) {
+    Node& node = nodes_[n];
+    if (node.count > 0) {
+      node.box.setEmpty();
+      for (int i = node.first; i < node.first + node.count; ++i)
+        for (int k = 0; k < 3; ++k) node.box.extend(Vec3(mesh_.V.row(mesh_.F(triangleOrder_[i], k)).transpose()));
+    } else {
+      node.box = nodes_[node.first].box.merged(nodes_[node.first + 1].box);
+    }
+  }
 }
 
 double MeshSurface::triangleDistance(int f, const Vec3& p, Vec3& barycentric) const {
   const Vec3 a = mesh_.V.row(mesh_.F(f, 0)), b = mesh_.V.row(mesh_.F(f, 1)), c = mesh_.V.row(mesh_.F(f, 2));
   barycentric = closestBarycentric(p, a, b, c);
-  return (barycentric(0) * a + barycentric(1) * b + barycentric(2) * c - p).squaredNorm();
+  const Vec3 d = barycentric(0) * a + barycentric(1) * b + barycentric(2) * c - p;
+  return dot(d, d);
 }
 
 void MeshSurface::searchTree(const Vec3& p, double& best, int& triangle, Vec3& barycentric) const {
@@ -327,12 +587,14 @@ void MeshSurface::searchTree(const Vec3& p, double& best, int& triangle, Vec3& b
   Vec3 bary;
   while (top > 0) {
     const Node& node = nodes_[stack[--top]];
-    if (node.box.squaredExteriorDistance(p) >= best) continue;
+    if (node.box.squaredExteriorDistance(p) > best) continue;
     if (node.count > 0) {
       for (int i = node.first; i < node.first + node.count; ++i) {
         const int f = triangleOrder_[i];
         const double d = triangleDistance(f, p, bary);
-        if (d < best) best = d, triangle = f, barycentric = bary;
+        // Ties (a point nearest to a shared edge or vertex) go to the lowest index, as in searchGrid, so that
+        // the answer does not depend on the tree's shape (std::nth_element differs between C++ libraries).
+        if (d < best || (d == best && f < triangle)) best = d, triangle = f, barycentric = bary;
       }
       continue;
     }
@@ -363,15 +625,16 @@ void MeshSurface::buildGrid() {
   auto forCells = [&](int f, const std::array<int, 6>& r, auto&& fn) {
     const Vec3 a = mesh_.V.row(mesh_.F(f, 0)), b = mesh_.V.row(mesh_.F(f, 1)), c = mesh_.V.row(mesh_.F(f, 2));
     const Vec3 n = (b - a).cross(c - a);
-    const double half = 0.5 * gridCell_ * (1 + 1e-6), reach = half * n.cwiseAbs().sum(), offset = n.dot(a);
-    const double slack = 1e-9 * n.norm() * (gridCell_ + a.cwiseAbs().maxCoeff() + bounds_.sizes().maxCoeff());
+    const double half = 0.5 * gridCell_ * (1 + 1e-6), reach = half * (std::abs(n.x()) + std::abs(n.y()) + std::abs(n.z()));
+    const double offset = dot(n, a);
+    const double slack = 1e-9 * norm(n) * (gridCell_ + a.cwiseAbs().maxCoeff() + bounds_.sizes().maxCoeff());
     const bool whole = r[0] == r[3] && r[1] == r[4] && r[2] == r[5];
     for (int k = r[2]; k <= r[5]; ++k)
       for (int j = r[1]; j <= r[4]; ++j)
         for (int i = r[0]; i <= r[3]; ++i) {
           if (!whole) {
             const Vec3 centre = gridOrigin_ + gridCell_ * Vec3(i + 0.5, j + 0.5, k + 0.5);
-            if (std::abs(n.dot(centre) - offset) > reach + slack) continue;
+            if (std::abs(dot(n, centre) - offset) > reach + slack) continue;
           }
           fn(i + std::size_t(gridSize_[0]) * (j + std::size_t(gridSize_[1]) * k));
         }
@@ -408,7 +671,8 @@ void MeshSurface::buildGrid() {
   for (int f = 0; f < nf; ++f) {
     const Vec3 a = mesh_.V.row(mesh_.F(f, 0)), b = mesh_.V.row(mesh_.F(f, 1)), c = mesh_.V.row(mesh_.F(f, 2));
     const Vec3 centre = (a + b + c) / 3;
-    const double radius = std::sqrt(std::max({(a - centre).squaredNorm(), (b - centre).squaredNorm(), (c - centre).squaredNorm()}));
+    const Vec3 da = a - centre, db = b - centre, dc = c - centre;
+    const double radius = std::sqrt(std::max({dot(da, da), dot(db, db), dot(dc, dc)}));
     spheres_[f] << centre, radius * (1 + 1e-12) + 1e-300;
   }
   const std::size_t cells = std::size_t(gridSize_[0]) * gridSize_[1] * gridSize_[2];
@@ -432,7 +696,8 @@ bool MeshSurface::searchGrid(const Vec3& p, double& best, int& triangle, Vec3& b
   auto test = [&](int f) {
     const Eigen::Vector4d& sphere = spheres_[f];
     const double reach = sphere(3) + bestRoot;
-    if ((sphere.head<3>() - p).squaredNorm() > reach * reach) return;  // the triangle's ball is farther
+    const Vec3 toCentre = sphere.head<3>() - p;
+    if (dot(toCentre, toCentre) > reach * reach) return;  // the triangle's ball is farther
     const double d = triangleDistance(f, p, bary);
     if (d < best || (d == best && f < triangle)) best = d, triangle = f, barycentric = bary, bestRoot = std::sqrt(d);
   };
@@ -445,11 +710,13 @@ bool MeshSurface::searchGrid(const Vec3& p, double& best, int& triangle, Vec3& b
     double nearest = std::numeric_limits<double>::infinity();
     for (int e = begin; e < end; ++e) {
       const int f = cellTriangles_[e];
-      const double d = (spheres_[f].head<3>() - p).squaredNorm();
+      const Vec3 dc = spheres_[f].head<3>() - p;
+      const double d = dot(dc, dc);
       if (d < nearest) nearest = d, first = f;
     }
     test(first);
-    for (int e = begin; e < end; ++e) test(cellTriangles_[e]);
+    for (int e = begin; e < end; ++e)
+      if (cellTriangles_[e] != first) test(cellTriangles_[e]);
   }
   // Every triangle nearer than the best so far meets the ball of that radius about p, so its box meets one of
   // the cells the ball's box meets (the grid holds all triangles). Too many cells: the tree, from that bound.
