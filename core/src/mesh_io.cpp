@@ -7,6 +7,9 @@
 #include <fstream>
 #include <numeric>
 #include <string_view>
+#include <system_error>
+
+#include <fast_float/fast_float.h>
 
 #include "phex/error.hpp"
 
@@ -95,14 +98,17 @@ class TextReader {
     throw Error(ErrorCode::InvalidInput, fileLabel(name_) + " line " + std::to_string(line_) + ": " + what);
   }
 
+  // Decimal numbers as strtod reads them (correctly rounded; a leading '+' allowed, inf and nan read and
+  // then refused as coordinates), by fast_float: musl's strtod, which wasm runs, goes through software long
+  // double and is several times slower. Hexadecimal floats are not read.
   double number(std::string_view t, const char* what, bool requireFinite = true) {
-    char buf[64];
-    if (t.size() >= sizeof buf) fail(std::string(what) + " '" + std::string(t.substr(0, 20)) + "...' is too long for a number");
-    std::memcpy(buf, t.data(), t.size());
-    buf[t.size()] = '\0';
-    char* end = nullptr;
-    const double x = std::strtod(buf, &end);
-    if (end != buf + t.size()) fail(std::string(what) + " '" + std::string(t) + "' is not a number");
+    if (t.size() >= 64) fail(std::string(what) + " '" + std::string(t.substr(0, 20)) + "...' is too long for a number");
+    const char* first = t.data();
+    const char* last = t.data() + t.size();
+    if (first != last && *first == '+' && last - first > 1 && first[1] != '-' && first[1] != '+') ++first;
+    double x = 0;
+    const fast_float::from_chars_result r = fast_float::from_chars(first, last, x);
+    if (t.empty() || r.ec != std::errc() || r.ptr != last) fail(std::string(what) + " '" + std::string(t) + "' is not a number");
     if (requireFinite && !std::isfinite(x)) fail(std::string(what) + " is " + std::string(t) + " (coordinates must be finite)");
     return x;
   }
