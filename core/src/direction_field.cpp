@@ -12,6 +12,22 @@
 namespace phex {
 namespace {
 
+// The cube root of x > 0 from +, *, / and the exact frexp / ldexp alone, so that every platform rounds it
+// alike (libm's cbrt differs between glibc and musl in the last bit, and the step controller below decides
+// on it): the exponent's third and the mantissa's root by Newton's method from a linear start, within an
+// ulp or two. x <= 0 or not finite: x itself.
+double portableCbrt(double x) {
+  if (!(x > 0) || !std::isfinite(x)) return x;
+  int e = 0;
+  double m = std::frexp(x, &e);  // x = m 2^e, m in [0.5, 1)
+  const int r = ((e % 3) + 3) % 3;
+  m = std::ldexp(m, r);          // m in [0.5, 4), e - r divisible by 3
+  double y = 0.6 + 0.4 * m;      // within 20 % of m^(1/3) on [0.5, 4)
+  for (int k = 0; k < 6; ++k) y -= (y * y * y - m) / (3 * y * y);
+  return std::ldexp(y, (e - r) / 3);
+}
+
+
 constexpr double kPi = 3.14159265358979323846;
 
 // The tangential part of v at g, normalized; nullopt when v is (nearly) normal.
@@ -289,7 +305,7 @@ void FlowTracer::attempt() {
   const std::optional<Vec3> k4 = field_->direction(pn, family_, &*k3);
   const double error = h * (-5.0 / 72 * k1_ + 1.0 / 12 * *k2 + 1.0 / 9 * *k3 - 1.0 / 8 * k4.value_or(*k3)).norm();
   if (error > tolerance && h > minStep) {
-    h *= std::max(0.2, 0.9 * std::cbrt(tolerance / error));
+    h *= std::max(0.2, 0.9 * portableCbrt(tolerance / error));
     return;
   }
   const double segment = (pn.point() - x).norm();
@@ -311,7 +327,7 @@ void FlowTracer::attempt() {
   current_ = pn;
   if (!k4) return end(FlowLine::End::Singularity);
   k1_ = *k4;
-  h = std::min(maxStep, h * std::min(4.0, 0.9 * std::cbrt(tolerance / std::max(error, 1e-300))));
+  h = std::min(maxStep, h * std::min(4.0, 0.9 * portableCbrt(tolerance / std::max(error, 1e-300))));
 }
 
 FlowLine traceFlowLine(const DirectionField& field, Family family, const SurfacePoint& start, const Vec3& initial,

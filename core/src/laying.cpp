@@ -1217,7 +1217,8 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
     throw Error(ErrorCode::CannotTile, "direction field '" + options.field + "' is singular at the start point " +
                                            describe(walker, start) + "; choose another start point or field");
   auto normalCurvature = [&](const Vec3& d) {
-    return std::abs(g.k1 * std::pow(d.dot(g.d1), 2) + g.k2 * std::pow(d.dot(g.d2), 2));
+    const double a = d.dot(g.d1), b = d.dot(g.d2);
+    return std::abs(g.k1 * a * a + g.k2 * b * b);
   };
   Family family;
   if (!dF || !dG) {

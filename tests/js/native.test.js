@@ -22,15 +22,18 @@ function parseObj(text) {
   return { positions, faces };
 }
 
-test('wasm and native CLI give the same torus', { skip: !existsSync(cli) && 'build/native/bin/phex is not built' }, async () => {
+// Runs the native CLI with `args` (writing OBJ) and wasm with `params`, and asserts the same faces and the
+// same vertices to round-off.
+async function assertSameRun(args, params) {
   const dir = mkdtempSync(join(tmpdir(), 'phex-native-'));
   try {
-    const out = join(dir, 'torus.obj');
-    execFileSync(cli, ['run', '--surface', 'torus', '--faces', '2000', '--quiet', '--out', out]);
+    const out = join(dir, 'hex.obj');
+    execFileSync(cli, ['run', ...args, '--quiet', '--out', out]);
     const native = parseObj(readFileSync(out, 'utf8'));
 
     const phex = await createPHex();
-    const { hex } = await phex.run({ surface: 'torus', faces: 2000 });
+    const { hex } = await phex.run(params);
+    phex.dispose();
     const faces = [];
     for (let f = 0; f + 1 < hex.faceOffsets.length; f++) faces.push([...hex.faceIndices.subarray(hex.faceOffsets[f], hex.faceOffsets[f + 1])]);
 
@@ -40,6 +43,27 @@ test('wasm and native CLI give the same torus', { skip: !existsSync(cli) && 'bui
     let worst = 0;
     for (let i = 0; i < native.positions.length; i++) worst = Math.max(worst, Math.abs(hex.positions[i] - native.positions[i]));
     assert.ok(worst <= RELATIVE_TOLERANCE * scale, `largest coordinate difference ${worst} (model size ${scale})`);
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
+}
+
+const noCli = !existsSync(cli) && 'build/native/bin/phex is not built';
+
+test('wasm and native CLI give the same torus', { skip: noCli }, async () => {
+  await assertSameRun(['--surface', 'torus', '--faces', '2000'], { surface: 'torus', faces: 2000 });
+});
+
+// An uploaded mesh goes through the curvature estimate (jet fits), closest-point queries and the start choice's
+// trial lays, where a last-bit difference between the platforms' libm or Eigen's summation order would
+// change the laying.
+test('wasm and native CLI tile the same uploaded mesh alike', { skip: noCli }, async () => {
+  const dir = mkdtempSync(join(tmpdir(), 'phex-native-mesh-'));
+  try {
+    const mesh = join(dir, 'roof.obj');
+    execFileSync(cli, ['triangulate', '--surface', 'wave-roof', '--method', 'lattice', '--faces', '4000', '--quiet', '--out', mesh]);
+    const bytes = new Uint8Array(readFileSync(mesh));
+    await assertSameRun(['--mesh', mesh, '--faces', '1000'], { mesh: bytes, meshFormat: 'obj', faces: 1000 });
   } finally {
     rmSync(dir, { recursive: true, force: true });
   }
