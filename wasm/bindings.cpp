@@ -116,6 +116,12 @@ phex::PipelineParams paramsFromJs(const val& o) {
       throw phex::Error(phex::ErrorCode::InvalidParameter, "surfaceFit must be 'on' or 'off' (got '" + fit + "')");
     p.fitSurface = fit == "on";
   }
+  if (has(o, "splitBoundary")) {
+    const std::string split = text(o, "splitBoundary");
+    if (split != "on" && split != "off")
+      throw phex::Error(phex::ErrorCode::InvalidParameter, "splitBoundary must be 'on' or 'off' (got '" + split + "')");
+    p.splitBoundaryPanels = split == "on";
+  }
   return p;
 }
 
@@ -201,6 +207,7 @@ val resultToJs(const phex::PipelineResult& r) {
   solve.set("planarityMax", r.solve.planarityMax);
   solve.set("displacementMax", r.solve.displacementMax);
   solve.set("surfaceFitted", r.solve.surfaceFitted);
+  solve.set("boundaryPanelsSplit", r.boundaryPanelsSplit);
   solve.set("surfaceDistanceBefore", r.solve.surfaceDistanceBefore);
   solve.set("surfaceDistanceAfter", r.solve.surfaceDistanceAfter);
   val log = val::array();

@@ -274,7 +274,8 @@ function showStats({ metrics, solve, timings, method, field, triangulation }) {
       : `${metrics.convexityMismatchCount} off${metrics.parabolicFaceCount ? `, ${metrics.parabolicFaceCount} across K = 0` : ''}`;
   $('regularity-mean').textContent = metrics.regularityMean === undefined ? '–' : metrics.regularityMean.toFixed(3);
   $('surface-distance').textContent = Number.isFinite(metrics.surfaceDistanceMax) ? `${fmt(metrics.surfaceDistanceMax)} max` : '–';
-  $('iterations').textContent = `${solve.iterations}${solve.converged ? '' : ' (not converged)'}`;
+  $('iterations').textContent = `${solve.iterations}${solve.converged ? '' : ' (not converged)'}${
+    solve.boundaryPanelsSplit ? `, ${solve.boundaryPanelsSplit} boundary panel${solve.boundaryPanelsSplit > 1 ? 's' : ''} split` : ''}`;
   $('timings').textContent = Object.entries(timings)
     .filter(([stage]) => stage !== 'total')
     .map(([stage, t]) => `${stage} ${ms(t)}`)

@@ -10,6 +10,7 @@
 #include "phex/laying.hpp"
 #include "phex/mesh_io.hpp"
 #include "phex/mesh_surface.hpp"
+#include "phex/metrics.hpp"
 #include "phex/subdivision.hpp"
 
 namespace phex {
@@ -405,6 +406,82 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
   return t;
 }
 
+namespace {
+
+// The planarity of a polygon through `ids` of `V` (facePlanarity of it alone).
+double polygonPlanarity(const Points& V, const std::vector<int>& ids) {
+  PolyMesh piece;
+  piece.V.resize(static_cast<int>(ids.size()), 3);
+  std::vector<int> local(ids.size());
+  for (std::size_t i = 0; i < ids.size(); ++i) piece.V.row(static_cast<int>(i)) = V.row(ids[i]), local[i] = static_cast<int>(i);
+  piece.addFace(local);
+  return facePlanarity(piece, 0);
+}
+
+// Where a solve stopped short of the tolerance on boundary panels alone (a panel closing a boundary fan
+// where the boundary meets a parabolic curve can be left with no planar shape that does not fold), each such
+// panel is cut in two along the diagonal that leaves its two pieces the most nearly planar, in `r.hex` and
+// `r.initial` alike, and the dual's bookkeeping follows (both pieces belong to the same vertex). Returns
+// how many panels were cut; none when an interior face away from those panels is off too (cutting them
+// would not help there).
+int splitUnplanarBoundaryPanels(PipelineResult& r, double tolerance) {
+  std::vector<char> cut(r.hex.faceCount(), 0), held(r.hex.V.rows(), 0);
+  std::vector<int> interiorOff;
+  int count = 0;
+  for (int f = 0; f < r.hex.faceCount(); ++f) {
+    if (!(facePlanarity(r.hex, f) > tolerance)) continue;
+    if (!r.dual.boundaryFace[f] || r.hex.faceSize(f) < 4) {
+      interiorOff.push_back(f);
+      continue;
+    }
+    cut[f] = 1, ++count;
+    for (int k = 0; k < r.hex.faceSize(f); ++k) held[r.hex.face(f)[k]] = 1;
+  }
+  if (count == 0) return 0;
+  for (int f : interiorOff) {  // an interior face off planar only where it shares a corner with such a panel
+    bool touches = false;
+    for (int k = 0; k < r.hex.faceSize(f); ++k) touches = touches || held[r.hex.face(f)[k]];
+    if (!touches) return 0;
+  }
+  PolyMesh hex, initial;
+  hex.V = r.hex.V;
+  initial.V = r.initial.V;
+  std::vector<int> faceVertex;
+  std::vector<std::uint8_t> boundary;
+  for (int f = 0; f < r.hex.faceCount(); ++f) {
+    const std::vector<int> ids(r.hex.face(f), r.hex.face(f) + r.hex.faceSize(f));
+    std::vector<std::vector<int>> parts;
+    if (cut[f]) {
+      const int n = static_cast<int>(ids.size());
+      double best = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < n; ++i)
+        for (int j = i + 2; j < n; ++j) {
+          if (i == 0 && j == n - 1) continue;
+          std::vector<int> a(ids.begin() + i, ids.begin() + j + 1), b(ids.begin() + j, ids.end());
+          b.insert(b.end(), ids.begin(), ids.begin() + i + 1);
+          const double score = std::max(polygonPlanarity(r.hex.V, a), polygonPlanarity(r.hex.V, b));
+          if (score < best) best = score, parts = {a, b};
+        }
+    } else {
+      parts = {ids};
+    }
+    for (const std::vector<int>& part : parts) {
+      hex.addFace(part);
+      initial.addFace(part);
+      faceVertex.push_back(r.dual.faceVertex[f]);
+      boundary.push_back(r.dual.boundaryFace[f]);
+    }
+  }
+  r.hex = std::move(hex);
+  r.initial = std::move(initial);
+  r.dual.mesh = r.initial;
+  r.dual.faceVertex = std::move(faceVertex);
+  r.dual.boundaryFace = std::move(boundary);
+  return count;
+}
+
+}  // namespace
+
 PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
   const auto t0 = std::chrono::steady_clock::now();
   PipelineResult r;
@@ -441,6 +518,20 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   po.fitSurface = params.fitSurface;
   po.surface = &surface;
   r.solve = planarize(r.hex, po, progress, cancel);
+  // Boundary panels that stay off planar are cut in two and the solve goes on from there (twice at most).
+  for (int round = 0; round < 2 && !r.solve.converged && params.splitBoundaryPanels; ++round) {
+    const int cut = splitUnplanarBoundaryPanels(r, po.tolerance);
+    if (cut == 0) break;
+    r.boundaryPanelsSplit += cut;
+    const PlanarizeReport first = r.solve;
+    r.solve = planarize(r.hex, po, progress, cancel);
+    r.solve.iterations += first.iterations;
+    r.solve.rounds += first.rounds;
+    r.solve.initialPlanarityMax = first.initialPlanarityMax;
+    r.solve.log.insert(r.solve.log.begin(), first.log.begin(), first.log.end());
+    const double h = r.hex.meanEdgeLength();
+    if (h > 0) r.solve.displacementMax = (r.hex.V - r.initial.V).rowwise().norm().maxCoeff() / h;
+  }
   clock.done("planarize");
 
   report("measure", 0, "measuring");

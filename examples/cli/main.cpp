@@ -62,6 +62,8 @@ Options of `phex run`:
                             reaches planarity it stops short and says so) or lets them fold
   --surface-fit on|off      once planar, shift every face plane along its normal (the faces stay
                             exactly planar) to bring the vertices closer to the surface (default on)
+  --split-boundary on|off   a boundary panel left off planar (every face away from it planar) is cut in
+                            two along its best diagonal and the solve goes on (default on)
   --out FILE                write the P-Hex mesh (for triangulate: the triangulation, OBJ)
   --format obj|ply|json     output format (default from the extension, else obj); json carries
                             the per-face metrics
@@ -154,7 +156,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                  {"field", p.field}, {"lowerBound", p.lowerBound}, {"surfaceParams", p.surfaceParams}, {"faces", p.faces}, {"cell", p.cell},
                  {"tolerance", p.tolerance}, {"lambda", p.lambda}, {"mu", p.mu}, {"maxIterations", p.maxIterations},
                  {"duality", phex::dualityName(p.duality)}, {"solver", phex::methodName(p.solver)},
-                 {"folds", p.preventFolds ? "prevent" : "allow"}, {"surfaceFit", p.fitSurface ? "on" : "off"}};
+                 {"folds", p.preventFolds ? "prevent" : "allow"}, {"surfaceFit", p.fitSurface ? "on" : "off"},
+                 {"splitBoundary", p.splitBoundaryPanels ? "on" : "off"}};
   if (p.start) params["start"] = {p.start->x(), p.start->y(), p.start->z()};
   if (p.direction) params["direction"] = {p.direction->x(), p.direction->y(), p.direction->z()};
   return {{"phex", "0.1.0"},
@@ -179,7 +182,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"displacementMax", r.solve.displacementMax},
           {"dualFallbacks", r.dual.fallbackCount},
           {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
-                      {"log", log}}},
+                      {"boundaryPanelsSplit", r.boundaryPanelsSplit}, {"log", log}}},
           {"surfaceFit", {{"applied", r.solve.surfaceFitted}, {"distanceBefore", r.solve.surfaceDistanceBefore},
                           {"distanceAfter", r.solve.surfaceDistanceAfter}}},
           {"milliseconds", timings},
@@ -255,6 +258,11 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
       const std::string v = value();
       if (v != "on" && v != "off") throw phex::Error(phex::ErrorCode::InvalidParameter, "--surface-fit must be on or off (got '" + v + "')");
       p.fitSurface = v == "on";
+    }
+    else if (a == "--split-boundary") {
+      const std::string v = value();
+      if (v != "on" && v != "off") throw phex::Error(phex::ErrorCode::InvalidParameter, "--split-boundary must be on or off (got '" + v + "')");
+      p.splitBoundaryPanels = v == "on";
     }
     else if (a == "--out") out = value();
     else if (a == "--triangulation") tri = value();

@@ -202,3 +202,33 @@ TEST_CASE("pipeline: a partial laying on a surface with umbilics names one") {
   CHECK(roof.check.coverage > 0.9);
   for (const std::string& n : roof.triangulation.notes) CHECK(n.find("umbilic") == std::string::npos);
 }
+
+TEST_CASE("pipeline: a boundary panel left off planar is cut in two, and the solve reaches the tolerance") {
+  // On the helicoid at 5000 faces a few boundary panels where rows reach the rims have no planar shape that
+  // does not fold; every interior face becomes planar.
+  PipelineParams p;
+  p.surface = "helicoid";
+  p.faces = 5000;
+  p.splitBoundaryPanels = false;
+  const PipelineResult whole = runPipeline(p);
+  INFO("whole: planarity " << whole.metrics.planarityMax);
+  REQUIRE_FALSE(whole.solve.converged);
+  CHECK(whole.boundaryPanelsSplit == 0);
+  p.splitBoundaryPanels = true;
+  const PipelineResult cut = runPipeline(p);
+  INFO("cut: " << cut.boundaryPanelsSplit << " panels, planarity " << cut.metrics.planarityMax);
+  CHECK(cut.solve.converged);
+  CHECK(cut.metrics.planarityMax <= 1e-9);
+  CHECK(cut.metrics.selfIntersectingCount == 0);
+  CHECK(cut.boundaryPanelsSplit >= 1);
+  CHECK(cut.hex.faceCount() == whole.hex.faceCount() + cut.boundaryPanelsSplit);
+  // The bookkeeping follows the pieces: one entry per face, the extra faces on the boundary.
+  REQUIRE(cut.dual.boundaryFace.size() == static_cast<std::size_t>(cut.hex.faceCount()));
+  REQUIRE(cut.dual.faceVertex.size() == static_cast<std::size_t>(cut.hex.faceCount()));
+  CHECK(cut.initial.faceCount() == cut.hex.faceCount());
+  int boundaryWhole = 0, boundaryCut = 0;
+  for (auto b : whole.dual.boundaryFace) boundaryWhole += b;
+  for (auto b : cut.dual.boundaryFace) boundaryCut += b;
+  CHECK(boundaryCut == boundaryWhole + cut.boundaryPanelsSplit);
+  CHECK(cut.interiorHexagonFraction == Approx(whole.interiorHexagonFraction));
+}

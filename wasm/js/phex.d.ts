@@ -157,6 +157,8 @@ export interface SolveReport {
   displacementMax: number;
   /** Whether the face planes were shifted towards the surface after planarity (`surfaceFit: 'on'`). */
   surfaceFitted: boolean;
+  /** Boundary panels cut in two to become planar (`splitBoundary: 'on'`); each piece is a face of `hex`. */
+  boundaryPanelsSplit?: number;
   /** Largest node distance to the surface over its bounding-box diagonal, before and after that shift. */
   surfaceDistanceBefore: number;
   surfaceDistanceAfter: number;
@@ -259,6 +261,12 @@ export interface RunParams {
    * kept only where the largest distance drops without folding a face (`solve.surfaceFitted`). 'off': not.
    */
   surfaceFit?: 'on' | 'off';
+  /**
+   * 'on' (default): a boundary panel the solve leaves off planar, while every face away from it is planar
+   * (where a boundary meets a parabolic curve a panel can have no planar shape that does not fold), is cut
+   * in two along its best diagonal and the solve goes on (`solve.boundaryPanelsSplit`). 'off': not.
+   */
+  splitBoundary?: 'on' | 'off';
   /**
    * Triangulation method: 'auto' (default: the surface's recommended method, `SurfaceSpec.method`;
    * 'prespecified' for uploaded meshes), 'progressive' conjugation (§5.2 Method 1), 'prespecified'

@@ -61,6 +61,9 @@ struct PipelineParams {
   PlanarizeMethod solver = PlanarizeMethod::LocalGlobal;  // planarity solver (see planarize.hpp)
   bool preventFolds = true;        // the local solver keeps simple faces simple (PlanarizeOptions::preventFolds)
   bool fitSurface = true;          // once planar, shift the face planes towards the surface (PlanarizeOptions::fitSurface)
+  // A boundary panel the solve leaves off planar (while every interior face is planar) is cut in two along
+  // its best diagonal and the solve goes on; PipelineResult::boundaryPanelsSplit counts them.
+  bool splitBoundaryPanels = true;
 };
 
 // "dupin" / "tangent" <-> Duality; parseDuality throws Error(InvalidParameter) for other names.
@@ -84,6 +87,7 @@ struct PipelineResult {
   MeshMetrics metrics;         // of `hex`
   double interiorHexagonFraction = 0.0;  // hexagons among the faces not on the boundary (dual.boundaryFace)
   PlanarizeReport solve;
+  int boundaryPanelsSplit = 0;  // boundary panels cut in two to become planar (PipelineParams::splitBoundaryPanels)
   std::vector<StageTiming> timings;
   double totalMilliseconds = 0.0;
 };
