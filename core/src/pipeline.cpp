@@ -408,41 +408,54 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
 
 namespace {
 
-// The planarity of a polygon through `ids` of `V` (facePlanarity of it alone).
-double polygonPlanarity(const Points& V, const std::vector<int>& ids) {
+// The polygon through `ids` of `V` as a mesh of its own.
+PolyMesh polygonAlone(const Points& V, const std::vector<int>& ids) {
   PolyMesh piece;
   piece.V.resize(static_cast<int>(ids.size()), 3);
   std::vector<int> local(ids.size());
   for (std::size_t i = 0; i < ids.size(); ++i) piece.V.row(static_cast<int>(i)) = V.row(ids[i]), local[i] = static_cast<int>(i);
   piece.addFace(local);
-  return facePlanarity(piece, 0);
+  return piece;
+}
+double polygonPlanarity(const Points& V, const std::vector<int>& ids) { return facePlanarity(polygonAlone(V, ids), 0); }
+// 1 when the polygon crosses itself (a triangle never does, unless degenerate), else 0.
+double polygonCrosses(const Points& V, const std::vector<int>& ids) {
+  return faceSelfIntersects(polygonAlone(V, ids), 0) ? 1.0 : 0.0;
 }
 
-// Where a solve stopped short of the tolerance on boundary panels alone (a panel closing a boundary fan
-// where the boundary meets a parabolic curve can be left with no planar shape that does not fold), each such
-// panel is cut in two along the diagonal that leaves its two pieces the most nearly planar, in `r.hex` and
-// `r.initial` alike, and the dual's bookkeeping follows (both pieces belong to the same vertex). Returns
-// how many panels were cut; none when an interior face away from those panels is off too (cutting them
-// would not help there).
-int splitUnplanarBoundaryPanels(PipelineResult& r, double tolerance) {
-  std::vector<char> cut(r.hex.faceCount(), 0), held(r.hex.V.rows(), 0);
+// Boundary panels the solve leaves off planar (a panel closing a boundary fan where the boundary meets a
+// parabolic curve can be left with no planar shape that does not fold) or crossing themselves (a quad whose
+// edge points ended on either side of its triangle point) are cut in two along the diagonal that leaves the
+// pieces simple and most nearly planar, in `r.hex` and `r.initial` alike; the dual's bookkeeping follows
+// (both pieces belong to the same vertex). Returns how many panels were cut. Where an interior face away
+// from such panels is off planar too, only the crossing panels are cut (cutting the others would not help).
+int splitBoundaryPanels(PipelineResult& r, double tolerance) {
+  std::vector<char> cut(r.hex.faceCount(), 0), crossing(r.hex.faceCount(), 0), held(r.hex.V.rows(), 0);
   std::vector<int> interiorOff;
   int count = 0;
   for (int f = 0; f < r.hex.faceCount(); ++f) {
-    if (!(facePlanarity(r.hex, f) > tolerance)) continue;
-    if (!r.dual.boundaryFace[f] || r.hex.faceSize(f) < 4) {
+    const bool offPlanar = facePlanarity(r.hex, f) > tolerance;
+    const bool boundaryPanel = r.dual.boundaryFace[f] && r.hex.faceSize(f) >= 4;
+    crossing[f] = boundaryPanel && faceSelfIntersects(r.hex, f);
+    if (!offPlanar && !crossing[f]) continue;
+    if (!boundaryPanel) {
       interiorOff.push_back(f);
       continue;
     }
     cut[f] = 1, ++count;
     for (int k = 0; k < r.hex.faceSize(f); ++k) held[r.hex.face(f)[k]] = 1;
   }
-  if (count == 0) return 0;
-  for (int f : interiorOff) {  // an interior face off planar only where it shares a corner with such a panel
+  bool away = false;  // an interior face off planar away from the panels: only the crossing ones are cut
+  for (int f : interiorOff) {
     bool touches = false;
     for (int k = 0; k < r.hex.faceSize(f); ++k) touches = touches || held[r.hex.face(f)[k]];
-    if (!touches) return 0;
+    away = away || !touches;
   }
+  if (away) {
+    count = 0;
+    for (int f = 0; f < r.hex.faceCount(); ++f) cut[f] = crossing[f], count += crossing[f];
+  }
+  if (count == 0) return 0;
   PolyMesh hex, initial;
   hex.V = r.hex.V;
   initial.V = r.initial.V;
@@ -459,7 +472,8 @@ int splitUnplanarBoundaryPanels(PipelineResult& r, double tolerance) {
           if (i == 0 && j == n - 1) continue;
           std::vector<int> a(ids.begin() + i, ids.begin() + j + 1), b(ids.begin() + j, ids.end());
           b.insert(b.end(), ids.begin(), ids.begin() + i + 1);
-          const double score = std::max(polygonPlanarity(r.hex.V, a), polygonPlanarity(r.hex.V, b));
+          const double crossing = polygonCrosses(r.hex.V, a) + polygonCrosses(r.hex.V, b);
+          const double score = crossing + std::max(polygonPlanarity(r.hex.V, a), polygonPlanarity(r.hex.V, b));
           if (score < best) best = score, parts = {a, b};
         }
     } else {
@@ -518,9 +532,10 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   po.fitSurface = params.fitSurface;
   po.surface = &surface;
   r.solve = planarize(r.hex, po, progress, cancel);
-  // Boundary panels that stay off planar are cut in two and the solve goes on from there (twice at most).
-  for (int round = 0; round < 2 && !r.solve.converged && params.splitBoundaryPanels; ++round) {
-    const int cut = splitUnplanarBoundaryPanels(r, po.tolerance);
+  // Boundary panels that stay off planar or cross themselves are cut in two and the solve goes on from there
+  // (twice at most).
+  for (int round = 0; round < 2 && params.splitBoundaryPanels; ++round) {
+    const int cut = splitBoundaryPanels(r, po.tolerance);
     if (cut == 0) break;
     r.boundaryPanelsSplit += cut;
     const PlanarizeReport first = r.solve;
