@@ -427,12 +427,18 @@ double polygonCrosses(const Points& V, const std::vector<int>& ids) {
 // parabolic curve can be left with no planar shape that does not fold) or crossing themselves (a quad whose
 // edge points ended on either side of its triangle point) are cut in two along the diagonal that leaves the
 // pieces simple and most nearly planar, in `r.hex` and `r.initial` alike; the dual's bookkeeping follows
-// (both pieces belong to the same vertex). Returns how many panels were cut. Where an interior face away
-// from such panels is off planar too, only the crossing panels are cut (cutting the others would not help).
-int splitBoundaryPanels(PipelineResult& r, double tolerance) {
+// (both pieces belong to the same vertex). Where an interior face away from such panels is off planar too,
+// only the crossing panels are cut (cutting the others would not help). `resolve` says whether solving
+// again can reach the tolerance: a panel off planar was cut and no interior face away from it is off.
+struct PanelCut {
+  int panels = 0;
+  bool resolve = false;
+};
+PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance) {
   std::vector<char> cut(r.hex.faceCount(), 0), crossing(r.hex.faceCount(), 0), held(r.hex.V.rows(), 0);
   std::vector<int> interiorOff;
   int count = 0;
+  bool offPlanarCut = false;
   for (int f = 0; f < r.hex.faceCount(); ++f) {
     const bool offPlanar = facePlanarity(r.hex, f) > tolerance;
     const bool boundaryPanel = r.dual.boundaryFace[f] && r.hex.faceSize(f) >= 4;
@@ -443,6 +449,7 @@ int splitBoundaryPanels(PipelineResult& r, double tolerance) {
       continue;
     }
     cut[f] = 1, ++count;
+    offPlanarCut = offPlanarCut || offPlanar;
     for (int k = 0; k < r.hex.faceSize(f); ++k) held[r.hex.face(f)[k]] = 1;
   }
   bool away = false;  // an interior face off planar away from the panels: only the crossing ones are cut
@@ -455,7 +462,7 @@ int splitBoundaryPanels(PipelineResult& r, double tolerance) {
     count = 0;
     for (int f = 0; f < r.hex.faceCount(); ++f) cut[f] = crossing[f], count += crossing[f];
   }
-  if (count == 0) return 0;
+  if (count == 0) return {};
   PolyMesh hex, initial;
   hex.V = r.hex.V;
   initial.V = r.initial.V;
@@ -491,7 +498,7 @@ int splitBoundaryPanels(PipelineResult& r, double tolerance) {
   r.dual.mesh = r.initial;
   r.dual.faceVertex = std::move(faceVertex);
   r.dual.boundaryFace = std::move(boundary);
-  return count;
+  return {count, offPlanarCut && !away};
 }
 
 }  // namespace
@@ -535,9 +542,11 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // Boundary panels that stay off planar or cross themselves are cut in two and the solve goes on from there
   // (twice at most).
   for (int round = 0; round < 2 && params.splitBoundaryPanels; ++round) {
-    const int cut = splitBoundaryPanels(r, po.tolerance);
-    if (cut == 0) break;
-    r.boundaryPanelsSplit += cut;
+    const PanelCut cut = splitBoundaryPanels(r, po.tolerance);
+    r.boundaryPanelsSplit += cut.panels;
+    if (!cut.resolve) break;
+    // Again from lambda = 1, now anchored at the positions reached (starting at the small lambda the first
+    // solve ended with took as long on the uploaded wave roof at 10k faces, 12 iterations against 14).
     const PlanarizeReport first = r.solve;
     r.solve = planarize(r.hex, po, progress, cancel);
     r.solve.iterations += first.iterations;
