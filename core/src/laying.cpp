@@ -24,10 +24,13 @@ constexpr double kMinConjugateSine = 0.15;
 constexpr double kNearParabolic = 0.1;  // kmin / kmax below which a point counts as near a parabolic curve
 constexpr double kResampleBelow = 0.55, kResampleAbove = 1.8;  // row spacing / cell that triggers a resample
 constexpr double kResampleLimit = 2.5;  // ... even at a parabolic curve
-// A row counts as at a parabolic curve for resampling where kmin / kmax is below this (on a fifth of it): the
-// pentagons and heptagons a resample leaves fold as Dupin hexagons even a little off the curve. At 0.1
-// (kNearParabolic) a sampled 12k-triangle torus folded 4-5 faces at 700, 800 and 900 faces and the analytic
-// torus (Method 2) 12 at 1500; at 0.2 none, and the uploaded cyclide converges at 10 of 12 sizes (was 8).
+// A row whose spacing grew counts as at a parabolic curve for resampling where kmin / kmax is below this (on
+// a fifth of it): the pentagons and heptagons a resample leaves fold as Dupin hexagons even a little off the
+// curve. At 0.1 (kNearParabolic) a sampled 12k-triangle torus folded 4-5 faces at 700, 800 and 900 faces and
+// the analytic torus (Method 2) 12 at 1500; at 0.2 none, and the uploaded cyclide converges at 10 of 12 sizes
+// (was 8). A row whose spacing shrank keeps kNearParabolic: at 0.2 the uploaded wave roof's rows along its
+// boundary near the parabolic curve went unresampled down to half a cell, and at 100k faces their thin
+// triangles left 8 faces folded and 207 off planar.
 constexpr double kResampleParabolic = 0.2;
 constexpr double kValidMargin = 1.1;  // Method 2 keeps the apexes this far above DE (in units of validStep)
 constexpr double kZipGap = 1.6;       // fronts facing each other closer than this many steps are zipped
@@ -996,9 +999,10 @@ void Laying::layLayer(std::size_t f, double stepScale) {
     // Not on a row at a parabolic curve: the pentagons and heptagons a resample leaves where the counts
     // change would sit where the Dupin dual is least stable; the next rows past the curve take it.
     int parabolic = 0;
+    const double nearParabolic = spacing > o_.cell ? kResampleParabolic : kNearParabolic;
     for (const Apex& a : run) {
       const double kmax = std::max(std::abs(a.p.g.k1), std::abs(a.p.g.k2));
-      parabolic += kmax > 0 && std::min(std::abs(a.p.g.k1), std::abs(a.p.g.k2)) < kResampleParabolic * kmax;
+      parabolic += kmax > 0 && std::min(std::abs(a.p.g.k1), std::abs(a.p.g.k2)) < nearParabolic * kmax;
     }
     const bool atParabolic = 5 * parabolic > length && spacing < kResampleLimit * o_.cell;
     if (curveUsable && !atParabolic && (spacing < kResampleBelow * o_.cell || spacing > kResampleAbove * o_.cell)) {
