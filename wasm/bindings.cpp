@@ -66,6 +66,15 @@ std::string text(const val& o, const char* key) {
   return o[key].as<std::string>();
 }
 
+// A two-way switch given as a string: true for `yes`, false for `no`, else Error(InvalidParameter) naming it.
+bool switchValue(const val& o, const char* key, const char* yes, const char* no) {
+  const std::string v = text(o, key);
+  if (v != yes && v != no)
+    throw phex::Error(phex::ErrorCode::InvalidParameter,
+                      std::string(key) + " must be '" + yes + "' or '" + no + "' (got '" + v + "')");
+  return v == yes;
+}
+
 phex::PipelineParams paramsFromJs(const val& o) {
   if (o.typeOf().as<std::string>() != "object" || o.isNull())
     throw phex::Error(phex::ErrorCode::InvalidParameter, "params must be an object");
@@ -104,24 +113,9 @@ phex::PipelineParams paramsFromJs(const val& o) {
     p.mesh = std::move(mesh);
   }
   if (has(o, "solver")) p.solver = phex::parseMethod(text(o, "solver"));
-  if (has(o, "folds")) {
-    const std::string folds = text(o, "folds");
-    if (folds != "prevent" && folds != "allow")
-      throw phex::Error(phex::ErrorCode::InvalidParameter, "folds must be 'prevent' or 'allow' (got '" + folds + "')");
-    p.preventFolds = folds == "prevent";
-  }
-  if (has(o, "surfaceFit")) {
-    const std::string fit = text(o, "surfaceFit");
-    if (fit != "on" && fit != "off")
-      throw phex::Error(phex::ErrorCode::InvalidParameter, "surfaceFit must be 'on' or 'off' (got '" + fit + "')");
-    p.fitSurface = fit == "on";
-  }
-  if (has(o, "splitBoundary")) {
-    const std::string split = text(o, "splitBoundary");
-    if (split != "on" && split != "off")
-      throw phex::Error(phex::ErrorCode::InvalidParameter, "splitBoundary must be 'on' or 'off' (got '" + split + "')");
-    p.splitBoundaryPanels = split == "on";
-  }
+  if (has(o, "folds")) p.preventFolds = switchValue(o, "folds", "prevent", "allow");
+  if (has(o, "surfaceFit")) p.fitSurface = switchValue(o, "surfaceFit", "on", "off");
+  if (has(o, "splitBoundary")) p.splitBoundaryPanels = switchValue(o, "splitBoundary", "on", "off");
   return p;
 }
 

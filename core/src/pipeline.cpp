@@ -463,9 +463,8 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance) {
     for (int f = 0; f < r.hex.faceCount(); ++f) cut[f] = crossing[f], count += crossing[f];
   }
   if (count == 0) return {};
-  PolyMesh hex, initial;
+  PolyMesh hex;  // the new faces; r.initial (and the dual's copy of it) take the same ones
   hex.V = r.hex.V;
-  initial.V = r.initial.V;
   std::vector<int> faceVertex;
   std::vector<std::uint8_t> boundary;
   for (int f = 0; f < r.hex.faceCount(); ++f) {
@@ -488,14 +487,14 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance) {
     }
     for (const std::vector<int>& part : parts) {
       hex.addFace(part);
-      initial.addFace(part);
       faceVertex.push_back(r.dual.faceVertex[f]);
       boundary.push_back(r.dual.boundaryFace[f]);
     }
   }
-  r.hex = std::move(hex);
-  r.initial = std::move(initial);
+  r.initial.offsets = hex.offsets;
+  r.initial.indices = hex.indices;
   r.dual.mesh = r.initial;
+  r.hex = std::move(hex);
   r.dual.faceVertex = std::move(faceVertex);
   r.dual.boundaryFace = std::move(boundary);
   return {count, offPlanarCut && !away};

@@ -62,8 +62,9 @@ Options of `phex run`:
                             reaches planarity it stops short and says so) or lets them fold
   --surface-fit on|off      once planar, shift every face plane along its normal (the faces stay
                             exactly planar) to bring the vertices closer to the surface (default on)
-  --split-boundary on|off   a boundary panel left off planar (every face away from it planar) is cut in
-                            two along its best diagonal and the solve goes on (default on)
+  --split-boundary on|off   a boundary panel left off planar (every face away from it planar), or one
+                            that crosses itself, is cut in two along its best diagonal and the solve
+                            goes on (default on)
   --out FILE                write the P-Hex mesh (for triangulate: the triangulation, OBJ)
   --format obj|ply|json     output format (default from the extension, else obj); json carries
                             the per-face metrics
@@ -95,6 +96,13 @@ double parseNumber(const std::string& opt, const std::string& text) {
   const double v = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || !std::isfinite(v)) usage(opt + " expects a number, got '" + text + "'");
   return v;
+}
+
+// A two-way switch: true for `yes`, false for `no`, else Error(InvalidParameter) naming the option.
+bool parseSwitch(const std::string& opt, const std::string& text, const char* yes, const char* no) {
+  if (text != yes && text != no)
+    throw phex::Error(phex::ErrorCode::InvalidParameter, opt + " must be " + yes + " or " + no + " (got '" + text + "')");
+  return text == yes;
 }
 
 int parseInt(const std::string& opt, const std::string& text) {
@@ -249,21 +257,9 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--max-iterations") p.maxIterations = parseInt(a, value());
     else if (a == "--duality") p.duality = phex::parseDuality(value());
     else if (a == "--solver") p.solver = phex::parseMethod(value());
-    else if (a == "--folds") {
-      const std::string v = value();
-      if (v != "prevent" && v != "allow") throw phex::Error(phex::ErrorCode::InvalidParameter, "--folds must be prevent or allow (got '" + v + "')");
-      p.preventFolds = v == "prevent";
-    }
-    else if (a == "--surface-fit") {
-      const std::string v = value();
-      if (v != "on" && v != "off") throw phex::Error(phex::ErrorCode::InvalidParameter, "--surface-fit must be on or off (got '" + v + "')");
-      p.fitSurface = v == "on";
-    }
-    else if (a == "--split-boundary") {
-      const std::string v = value();
-      if (v != "on" && v != "off") throw phex::Error(phex::ErrorCode::InvalidParameter, "--split-boundary must be on or off (got '" + v + "')");
-      p.splitBoundaryPanels = v == "on";
-    }
+    else if (a == "--folds") p.preventFolds = parseSwitch(a, value(), "prevent", "allow");
+    else if (a == "--surface-fit") p.fitSurface = parseSwitch(a, value(), "on", "off");
+    else if (a == "--split-boundary") p.splitBoundaryPanels = parseSwitch(a, value(), "on", "off");
     else if (a == "--out") out = value();
     else if (a == "--triangulation") tri = value();
     else if (a == "--initial") initial = value();
