@@ -54,6 +54,7 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--solver', 'magic'], /solver must be/],
     [['run', '--folds', 'maybe'], /--folds must be prevent or allow/],
     [['run', '--surface-fit', 'maybe'], /--surface-fit must be on or off/],
+    [['run', '--split-boundary', 'maybe'], /--split-boundary must be on or off/],
     [['run', '--start', '1,2'], /--start expects X,Y,Z/],
     [['run', '--direction', '0,0,0'], /direction must be a non-zero vector/],
     [['run', '--param', 'R'], /NAME=VALUE/],

@@ -271,6 +271,23 @@ test("surfaceFit: 'on' shifts the planes closer to the surface, faces stay plana
   assert.match(error.message, /surfaceFit/);
 });
 
+test("splitBoundary: 'on' cuts boundary panels left off planar and reaches the goal; 'off' does not; anything else is named", async () => {
+  // The helicoid at 5000 faces leaves a few boundary panels where rows reach the rims with no planar shape.
+  const cut = await phex.run({ surface: 'helicoid', faces: 5000 });
+  const whole = await phex.run({ surface: 'helicoid', faces: 5000, splitBoundary: 'off' });
+  assert.ok(cut.solve.boundaryPanelsSplit >= 1);
+  assert.ok(cut.solve.converged);
+  assert.ok(cut.metrics.planarityMax <= 1e-9);
+  assert.equal(whole.solve.boundaryPanelsSplit, 0);
+  assert.ok(!whole.solve.converged);
+  assert.equal(cut.hex.faceOffsets.length - 1, whole.hex.faceOffsets.length - 1 + cut.solve.boundaryPanelsSplit);
+  const error = await rejection({ surface: 'torus', splitBoundary: 'maybe' });
+  assert.equal(error.code, 'invalid_parameter');
+  assert.match(error.message, /splitBoundary/);
+  const after = await phex.run({ surface: 'torus', faces: 500 });  // the module stays usable
+  assert.ok(after.metrics.planarityMax <= 1e-9);
+});
+
 test('start and direction set where and which way the base curve runs; bad ones are named', async () => {
   const outer = await phex.run({ surface: 'torus', method: 'prespecified', faces: 800, start: [1.4, 0, 0], direction: [0, 1, 0] });
   assert.match(outer.triangulation.notes[0], /L0 closed/);

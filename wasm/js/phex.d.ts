@@ -263,8 +263,9 @@ export interface RunParams {
   surfaceFit?: 'on' | 'off';
   /**
    * 'on' (default): a boundary panel the solve leaves off planar, while every face away from it is planar
-   * (where a boundary meets a parabolic curve a panel can have no planar shape that does not fold), is cut
-   * in two along its best diagonal and the solve goes on (`solve.boundaryPanelsSplit`). 'off': not.
+   * (where a boundary meets a parabolic curve a panel can have no planar shape that does not fold), or one
+   * that crosses itself, is cut in two along its best diagonal and the solve goes on
+   * (`solve.boundaryPanelsSplit`). 'off': not.
    */
   splitBoundary?: 'on' | 'off';
   /**

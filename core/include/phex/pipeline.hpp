@@ -61,8 +61,9 @@ struct PipelineParams {
   PlanarizeMethod solver = PlanarizeMethod::LocalGlobal;  // planarity solver (see planarize.hpp)
   bool preventFolds = true;        // the local solver keeps simple faces simple (PlanarizeOptions::preventFolds)
   bool fitSurface = true;          // once planar, shift the face planes towards the surface (PlanarizeOptions::fitSurface)
-  // A boundary panel the solve leaves off planar (while every interior face is planar) is cut in two along
-  // its best diagonal and the solve goes on; PipelineResult::boundaryPanelsSplit counts them.
+  // A boundary panel the solve leaves off planar (while every face away from it is planar), or one that
+  // crosses itself, is cut in two along its best diagonal and the solve goes on where that can reach the
+  // tolerance; PipelineResult::boundaryPanelsSplit counts them.
   bool splitBoundaryPanels = true;
 };
 
