@@ -6,7 +6,9 @@
 #include <cstdint>
 #include <limits>
 #include <sstream>
+#include <tuple>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "phex/duality.hpp"
 #include "phex/dupin.hpp"
@@ -39,6 +41,29 @@ constexpr double kZipGap = 1.6;       // fronts facing each other closer than th
 // (zipIfMeeting), the last one zipped. Full steps would leave whatever remains for the zip, down to slivers,
 // whose stars (K < 0 in particular) and Dupin hexagons fold. Split fronts keep kZipGap.
 constexpr double kMeetReach = 3.5;
+// A region left uncovered by the rows laid so far whose middle is at least kSeedHole cells from every laid vertex,
+// with at least kSeedShare of the surface's kSeedSamples samples uncovered, seeds another system of rows (run);
+// at most kMaxSeeds are tried. Its L0 keeps kSeedClearance cells from the laid vertices.
+constexpr double kSeedHole = 4.0;
+constexpr double kSeedShare = 0.05;
+// The first such system only where the first left at least this share uncovered: a laying that covers most of
+// the surface (the helicoid's rows end short of its corners, 11 %) is better left whole than seamed.
+constexpr double kSeedFirstShare = 0.2;
+constexpr int kSeedSamples = 1024;
+constexpr int kMaxSeeds = 6;
+constexpr double kSeedClearance = 0.9;
+constexpr int kShrunkLoop = 16;  // a closed row of fewer vertices checks its apexes' triangles against laid ones
+// ... seeded around the most nearly umbilic uncovered sample, relative k1 - k2 below this, if there is one.
+constexpr double kSeedUmbilic = 0.05;
+// Gaps left between systems (and between the fronts of one) are closed by triangles on the laid boundary
+// vertices (fillGaps): edges up to kFillEdge cells, angles whose sine is at least kFillSine; where none fits,
+// a new vertex at least kFillClearance cells from the others. Holes left inside the surface then close with
+// angles down to kFillSineBlunt and edges up to kFillEdgeWide cells.
+constexpr double kFillEdge = 1.6;
+constexpr double kFillSine = 0.5;  // 30 degrees
+constexpr double kFillClearance = 0.7;
+constexpr double kFillSineBlunt = 0.3;  // 17.5 degrees
+constexpr double kFillEdgeWide = 2.0;
 constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
 constexpr double kEllFirst = 1.5;     // ... at first only this many: further where no crossing is found
 constexpr int kParabolicSamples = 400;  // samples of the surface that vote for the base family at parabolic curves
@@ -61,6 +86,15 @@ std::string describe(const SurfaceWalker& walker, const SurfacePoint& p) {
 }
 
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// Whether segments pr and st of a plane cross at a point inside both (touching or collinear does not count).
+bool segmentsCross(const Vec2& p, const Vec2& r, const Vec2& s, const Vec2& t) {
+  const double d1 = cross2(r - p, s - p), d2 = cross2(r - p, t - p), d3 = cross2(t - s, p - s), d4 = cross2(t - s, r - s);
+  return ((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0));
+}
+
+// The directed edge a -> b as one number.
+std::int64_t edgeKey(int a, int b) { return (static_cast<std::int64_t>(a) << 32) | static_cast<std::uint32_t>(b); }
 
 std::vector<double> cumulativeArc(const std::vector<SurfacePoint>& curve) {
   std::vector<double> arc(curve.size(), 0.0);
@@ -217,7 +251,12 @@ class Laying {
 
  private:
   int addVertex(const SurfacePoint& p, double ratio, double height = std::numeric_limits<double>::quiet_NaN());
+  FlowLine::End traceBase(const SurfacePoint& start, const Vec3& initial, Row& row, std::vector<double>& arcs) const;
   Row baseCurve(const SurfacePoint& start, const Vec3& initial);
+  std::optional<Row> seedCurve(const SurfacePoint& start, const Vec3& initial);
+  void laySystem(const Row& L0);
+  std::optional<Vec3> uncoveredSeed(std::vector<Vec3>& tried) const;
+  int fillGaps();
   bool zipIfMeeting(std::size_t f, double& stepScale);
   struct RowOffset {
     Vec3 tangent, left, offset = Vec3::Zero();
@@ -234,6 +273,8 @@ class Laying {
   std::vector<std::optional<Apex>> prespecifiedApexes(const Row& row, const std::vector<Segment>& segments, Row& next,
                                                       bool recordConjugateLines);
   bool collides(const Vec3& p, double radius) const;
+  void addTriangle(int a, int b, int c);
+  bool overlapsLaid(int a, int b, const SurfacePoint& c);
   void zip(std::vector<int> P, bool closedP, std::vector<int> Q, bool closedQ);
   void setOwnCurve(Row& row) const;
   std::optional<Crossing> crossCurve(const LocalGeometry& g, const FlowLine& ell, const std::vector<double>& ellArc,
@@ -253,8 +294,15 @@ class Laying {
   std::vector<char> inBase_;         // vertices of the row being laid from (exempt from the collision test)
   std::vector<Eigen::Vector3i> triangles_;
   PointGrid grid_;
+  PointGrid triangleGrid_{2 * o_.cell};  // triangle centroids, for overlapsLaid
+  std::size_t triangleGridCount_ = 0;    // triangles_[0 ..) in triangleGrid_
+  // From the second system on, every directed edge laid: a triangle that would use one again (a later system's
+  // fronts zipped across each other's first rows) is left out instead of making the mesh non-manifold.
+  std::unordered_set<std::int64_t> directedEdges_;
   const int smoothingPasses_;  // of the apex offsets per layer, Method 1
   std::vector<Front> fronts_;
+  std::size_t systemFront0_ = 0;  // fronts_[systemFront0_ ..] belong to the system being laid (see run)
+  int systems_ = 0;               // systems of rows laid, each from its own L0
   std::vector<std::vector<Vec3>> fieldLines_;
   mutable std::vector<Vec2> ellPlane_;  // crossCurve's scratch: l in the tangent plane
 
@@ -262,7 +310,7 @@ class Laying {
   int boundedLayers_ = 0, boundedSegments_ = 0, reusedLayers_ = 0, reusedSegments_ = 0;
   int filledApexes_ = 0;
   int resampled_ = 0, boundaryStops_ = 0, collisions_ = 0, invalidDrops_ = 0, splits_ = 0, layers_ = 0;
-  int asymptoticStops_ = 0;
+  int asymptoticStops_ = 0, gapTriangles_ = 0;
   std::string firstResample_, firstInvalidDrop_, firstReuse_, firstAsymptoticStop_;
   std::vector<std::string> zipNotes_;
 };
@@ -300,11 +348,11 @@ void Laying::setOwnCurve(Row& row) const {
 
 // L0: the flow line of D_F through the start, both ways to the boundary or once around a loop, sampled every
 // cell from the start.
-Row Laying::baseCurve(const SurfacePoint& start, const Vec3& initial) {
+// The flow line of D_F through the start, both ways to the boundary or once around a loop (row.curve, closed,
+// arcs), and the arc lengths every cell from the start where L0's samples go; returns how the line ended.
+FlowLine::End Laying::traceBase(const SurfacePoint& start, const Vec3& initial, Row& row, std::vector<double>& arcs) const {
   const double reach = 4 * walker_.surface().bounds().diagonal().norm() + 10 * o_.cell;
   const FlowLine forward = traceFlowLine(field_, F_, start, initial, reach, true);
-  Row row;
-  std::vector<double> arcs;
   if (forward.end == FlowLine::End::Closed) {
     row.closed = true;
     row.curve = forward.points;
@@ -322,10 +370,17 @@ Row Laying::baseCurve(const SurfacePoint& start, const Vec3& initial) {
     for (int k = -static_cast<int>(std::floor(s0 / o_.cell + 1e-9)); s0 + k * o_.cell <= row.curveLength + 1e-9 * o_.cell; ++k)
       arcs.push_back(s0 + k * o_.cell);
   }
+  return forward.end;
+}
+
+Row Laying::baseCurve(const SurfacePoint& start, const Vec3& initial) {
+  Row row;
+  std::vector<double> arcs;
+  const FlowLine::End end = traceBase(start, initial, row, arcs);
   if (arcs.size() < 2)
     cannotTile(start, "the base curve (a flow line of the field) is shorter than one cell, " +
-                          std::string(forward.end == FlowLine::End::Singularity ? "ending at a singularity of the field"
-                                                                                : "ending at the boundary") +
+                          std::string(end == FlowLine::End::Singularity ? "ending at a singularity of the field"
+                                                                  : "ending at the boundary") +
                           "; choose a smaller cell, another start or another field");
   for (double t : arcs) {
     const SurfacePoint p = pointAtArc(walker_, row.curve, row.curveArc, row.closed, row.curveLength, t);
@@ -425,6 +480,46 @@ Segment Laying::segment(const Row& row, int i) const {
 bool Laying::collides(const Vec3& p, double radius) const {
   bool hit = false;
   grid_.forNear(p, radius, [&](int id) { hit = hit || (!inBase_[id] && (vertices_[id].point() - p).norm() < radius); });
+  return hit;
+}
+
+// Whether the triangle (a, b, c) would overlap a laid triangle, in the tangent plane at c: an edge crossing an
+// edge, or one's centroid inside the other (shared corners aside). The vertex collision test keeps apexes off
+// laid vertices; a later system's rows (run) must also keep off the triangles of the rows they meet.
+bool Laying::overlapsLaid(int a, int b, const SurfacePoint& c) {
+  for (; triangleGridCount_ < triangles_.size(); ++triangleGridCount_) {
+    const Eigen::Vector3i& t = triangles_[triangleGridCount_];
+    triangleGrid_.insert(static_cast<int>(triangleGridCount_),
+                         (vertices_[t(0)].point() + vertices_[t(1)].point() + vertices_[t(2)].point()) / 3);
+  }
+  const LocalGeometry& g = c.g;
+  const std::array<Vec2, 3> T = {toTangentPlane(g, vertices_[a].point()), toTangentPlane(g, vertices_[b].point()),
+                                 toTangentPlane(g, c.point())};
+  const std::array<int, 3> ids = {a, b, -1};
+  const Vec3 centre = (vertices_[a].point() + vertices_[b].point() + c.point()) / 3;
+  auto inside = [](const std::array<Vec2, 3>& t, const Vec2& p) {
+    const double d1 = cross2(t[1] - t[0], p - t[0]), d2 = cross2(t[2] - t[1], p - t[1]), d3 = cross2(t[0] - t[2], p - t[2]);
+    return (d1 > 0 && d2 > 0 && d3 > 0) || (d1 < 0 && d2 < 0 && d3 < 0);
+  };
+  bool hit = false;
+  triangleGrid_.forNear(centre, 2 * o_.cell, [&](int k) {
+    if (hit) return;
+    const Eigen::Vector3i& t = triangles_[k];
+    std::array<Vec2, 3> U;
+    for (int j = 0; j < 3; ++j) {
+      const Vec3& x = vertices_[t(j)].point();
+      if (std::abs((x - c.point()).dot(g.normal)) > 2 * o_.cell) return;  // another sheet
+      U[j] = toTangentPlane(g, x);
+    }
+    for (int i = 0; i < 3 && !hit; ++i)
+      for (int j = 0; j < 3 && !hit; ++j) {
+        const int p = ids[i], q = ids[(i + 1) % 3], r = t(j), s = t((j + 1) % 3);
+        if (p >= 0 && (p == r || p == s)) continue;
+        if (q >= 0 && (q == r || q == s)) continue;
+        hit = segmentsCross(T[i], T[(i + 1) % 3], U[j], U[(j + 1) % 3]);
+      }
+    if (!hit) hit = inside(U, (T[0] + T[1] + T[2]) / 3) || inside(T, (U[0] + U[1] + U[2]) / 3);
+  });
   return hit;
 }
 
@@ -698,8 +793,8 @@ void Laying::zip(std::vector<int> P, bool closedP, std::vector<int> Q, bool clos
       if (i == n) advanceP = false;
       else if (j == m) advanceP = true;
       else if (n != m) advanceP = (at(P[(i + 1) % n]) - at(Q[j % m])).norm() <= (at(P[i % n]) - at(Q[(j + 1) % m])).norm();
-      if (advanceP) triangles_.emplace_back(P[i % n], P[(i + 1) % n], Q[j % m]), ++i;
-      else triangles_.emplace_back(P[i % n], Q[(j + 1) % m], Q[j % m]), ++j;
+      if (advanceP) addTriangle(P[i % n], P[(i + 1) % n], Q[j % m]), ++i;
+      else addTriangle(P[i % n], Q[(j + 1) % m], Q[j % m]), ++j;
       advanceP = !advanceP;
     }
     return;
@@ -715,8 +810,8 @@ void Laying::zip(std::vector<int> P, bool closedP, std::vector<int> Q, bool clos
     const double dP = i + 1 < n ? (at(P[i + 1]) - at(Q[j])).norm() : std::numeric_limits<double>::infinity();
     const double dQ = j + 1 < m ? (at(P[i]) - at(Q[j + 1])).norm() : std::numeric_limits<double>::infinity();
     if (std::min(dP, dQ) > limit) break;
-    if (dP <= dQ) triangles_.emplace_back(P[i], P[i + 1], Q[j]), ++i;
-    else triangles_.emplace_back(P[i], Q[j + 1], Q[j]), ++j;
+    if (dP <= dQ) addTriangle(P[i], P[i + 1], Q[j]), ++i;
+    else addTriangle(P[i], Q[j + 1], Q[j]), ++j;
   }
 }
 
@@ -812,7 +907,7 @@ bool Laying::zipIfMeeting(std::size_t f, double& stepScale) {
   std::size_t nearest = fronts_.size();
   double gap = kMeetReach;
   bool staggered = true;
-  const bool unsplit = fronts_.size() == 2;  // the two fronts of L0, neither split yet
+  const bool unsplit = fronts_.size() - systemFront0_ == 2;  // the two fronts of this system's L0, neither split yet
   for (std::size_t k = 0; k < fronts_.size() && gap > 0; ++k) {
     if (k == f || !fronts_[k].active) continue;
     if (!unsplit || fronts_[f].row.closed != fronts_[k].row.closed) {
@@ -869,7 +964,7 @@ void Laying::layLayer(std::size_t f, double stepScale) {
     if (!segments.back().asymptotic) continue;
     // From L0 this is the field's doing: fail. Later, Method 1's rows have turned there (§5.2: their
     // orientation is not controlled): that front stops there.
-    if (fronts_[f].layers == 0)
+    if (fronts_[f].layers == 0 && systems_ == 1)
       cannotTile(segments.back().M, kAsymptoticBase);
     if (!asymptoticStops_++) firstAsymptoticStop_ = describe(walker_, segments.back().M);
   }
@@ -883,10 +978,32 @@ void Laying::layLayer(std::size_t f, double stepScale) {
   std::vector<std::optional<Apex>> apexes = o_.method == LayingMethod::Progressive
                                                 ? progressiveApexes(A, segments)
                                                 : prespecifiedApexes(A, segments, next, layers_ < 2);
+  // A loop shrunk to a few vertices (closing onto an umbilic or a pole) lays its last rows over the ones before.
+  const bool shrunk = A.closed && count < kShrunkLoop;
   for (int i = 0; i < n; ++i)
-    if (apexes[i] && collides(apexes[i]->p.point(), 0.5 * std::min(segments[i].step, segments[i].base))) {
+    if (apexes[i] && collides(apexes[i]->p.point(), std::max(0.5 * std::min(segments[i].step, segments[i].base),
+                                                              shrunk ? 0.35 * o_.cell : 0.0))) {
       apexes[i].reset();
       ++collisions_;
+    } else if (apexes[i] && (systems_ > 1 || shrunk) && overlapsLaid(A.ids[i], A.ids[(i + 1) % count], apexes[i]->p)) {
+      apexes[i].reset();
+      ++collisions_;
+    }
+  // A later system's rows may also turn over on themselves (a small ring around an umbilic shrinking onto it):
+  // an apex whose triangles would face against the surface normal is dropped.
+  if (systems_ > 1)
+    for (int i = 0; i < n; ++i) {
+      if (!apexes[i]) continue;
+      const Vec3 &a = vertices_[A.ids[i]].point(), &b = vertices_[A.ids[(i + 1) % count]].point();
+      const Vec3& c = apexes[i]->p.point();
+      const Vec3& normal = apexes[i]->p.g.normal;
+      bool upright = (b - a).cross(c - a).dot(normal) > 0;
+      const int j = A.closed ? (i + 1) % n : i + 1;
+      if (upright && j < n && apexes[j]) upright = (apexes[j]->p.point() - b).cross(c - b).dot(normal) > 0;
+      if (!upright) {
+        apexes[i].reset();
+        ++collisions_;
+      }
     }
   // A single missing apex between two laid ones (a collision, a crossing that failed, a drop below DE) would
   // split the row — a closed one into an open row whose ends then shrink layer by layer, leaving wedges of
@@ -1014,9 +1131,15 @@ void Laying::layLayer(std::size_t f, double stepScale) {
                               : std::max(2, static_cast<int>(std::lround(span / o_.cell)) + 1);
       std::vector<double> arcs;
       for (int k = 0; k < m; ++k) arcs.push_back(C.sampleArc.front() + span * k / (closedRun ? m : m - 1));
-      for (double t : arcs)
-        C.ids.push_back(
-            addVertex(pointAtArc(walker_, C.curve, C.curveArc, C.closed, C.curveLength, t), ratio, height));
+      std::vector<SurfacePoint> points;
+      for (double t : arcs) points.push_back(pointAtArc(walker_, C.curve, C.curveArc, C.closed, C.curveLength, t));
+      // A loop fitted around an umbilic can fold back on itself (points of it nearly coincide): the front
+      // stops there instead of laying a fan onto doubled vertices, and the cap is left to the gap filling.
+      bool folded = false;
+      for (int k = 0; closedRun && m <= kShrunkLoop && k < m; ++k)
+        for (int j = k + 1; j < m; ++j) folded = folded || (points[k].point() - points[j].point()).norm() < 0.25 * span / m;
+      if (folded) continue;
+      for (const SurfacePoint& p : points) C.ids.push_back(addVertex(p, ratio, height));
       C.sampleArc = arcs;
       zip(below, closedRun, C.ids, closedRun);
       if (!resampled_++) {
@@ -1029,9 +1152,9 @@ void Laying::layLayer(std::size_t f, double stepScale) {
       for (int k = 0; k < length; ++k) C.ids.push_back(addVertex(run[k].p, run[k].ratio, heights[k]));
       for (int k = 0; k < length; ++k) {
         const int i = (first + k) % n;
-        triangles_.emplace_back(A.ids[i], A.ids[(i + 1) % count], C.ids[k]);
+        addTriangle(A.ids[i], A.ids[(i + 1) % count], C.ids[k]);
         if (k + 1 < length || closedRun)
-          triangles_.emplace_back(A.ids[(i + 1) % count], C.ids[(k + 1) % length], C.ids[k]);
+          addTriangle(A.ids[(i + 1) % count], C.ids[(k + 1) % length], C.ids[k]);
       }
     }
     if (o_.method == LayingMethod::Progressive) setOwnCurve(C);
@@ -1053,14 +1176,28 @@ void Laying::layLayer(std::size_t f, double stepScale) {
   for (std::size_t k = 1; k < produced.size(); ++k) fronts_.push_back(std::move(produced[k]));
 }
 
-Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
-  Row L0 = baseCurve(start, initial);
+// Lays one system of rows: L0's two fronts and the fronts they split into, until none is active.
+void Laying::addTriangle(int a, int b, int c) {
+  if (systems_ > 1) {
+    const std::int64_t e[3] = {edgeKey(a, b), edgeKey(b, c), edgeKey(c, a)};
+    if (directedEdges_.count(e[0]) || directedEdges_.count(e[1]) || directedEdges_.count(e[2])) return;
+    directedEdges_.insert(e, e + 3);
+  }
+  triangles_.emplace_back(a, b, c);
+}
+
+void Laying::laySystem(const Row& L0) {
+  systemFront0_ = fronts_.size();
+  if (++systems_ == 2) {
+    for (const Eigen::Vector3i& t : triangles_)
+      for (int k = 0; k < 3; ++k) directedEdges_.insert(edgeKey(t(k), t((k + 1) % 3)));
+  }
   fronts_.push_back(Front{L0, true, kEquilateralRatio * o_.cell});
   fronts_.push_back(Front{reversed(L0), true, kEquilateralRatio * o_.cell});
   const double area = std::max(walker_.surface().bounds().diagonal().squaredNorm(), o_.cell * o_.cell);
   while (layers_ < o_.maxLayers) {
     bool any = false;
-    for (std::size_t f = 0; f < fronts_.size() && layers_ < o_.maxLayers; ++f) {
+    for (std::size_t f = systemFront0_; f < fronts_.size() && layers_ < o_.maxLayers; ++f) {
       if (!fronts_[f].active) continue;
       checkCancel(cancel_);
       any = true;
@@ -1074,6 +1211,413 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
                  "layer " + std::to_string(layers_) + ", " + std::to_string(vertices_.size()) + " vertices"});
     }
   }
+}
+
+// Where a surface has no singularity-free conjugate network (round bumps: the rows around each top are closed
+// rings, and no one family of rows reaches the next bump), the system laid from L0 covers one region and
+// stops. The middle of the largest region it left uncovered — the sample of the surface farthest from every
+// laid vertex (and from the seeds tried before), when that is at least kSeedHole cells away — seeds the next
+// system, whose rows stop where they meet the laid ones (the collision test); nullopt when there is none.
+std::optional<Vec3> Laying::uncoveredSeed(std::vector<Vec3>& tried) const {
+  const std::vector<LocalGeometry> samples = walker_.surface().samples(kSeedSamples);
+  std::vector<Vec3> covered;
+  std::vector<const LocalGeometry*> open;
+  for (const LocalGeometry& g : samples) {
+    bool near = false;
+    grid_.forNear(g.point, o_.cell, [&](int id) { near = near || (vertices_[id].point() - g.point).norm() < o_.cell; });
+    if (near) covered.push_back(g.point);
+    else open.push_back(&g);
+  }
+  const double share = tried.empty() ? kSeedFirstShare : kSeedShare;
+  if (covered.empty() || open.size() < share * samples.size()) return std::nullopt;
+  for (const Vec3& t : tried) covered.push_back(t);
+  const LocalGeometry *farthest = nullptr, *umbilic = nullptr;
+  double widest = kSeedHole * o_.cell, umbilicRoom = 0, roundest = kSeedUmbilic;
+  for (const LocalGeometry* g : open) {
+    double room = std::numeric_limits<double>::infinity();
+    for (const Vec3& q : covered) room = std::min(room, (g->point - q).norm());
+    if (room < kSeedHole * o_.cell) continue;
+    if (room > widest) widest = room, farthest = g;
+    const double a = std::abs(g->k1), b = std::abs(g->k2);
+    if (std::min(a, b) > 0.05 * std::max(a, b) && std::abs(g->k1 - g->k2) / (a + b) < roundest)
+      roundest = std::abs(g->k1 - g->k2) / (a + b), umbilic = g, umbilicRoom = room;
+  }
+  // Around an umbilic the rows of a principal family close into rings: L0 is one of them, half-way from the
+  // umbilic to the laid rows, and its two fronts lay inwards to the top and outwards to meet them.
+  std::optional<Vec3> seed;
+  if (umbilic) seed = umbilic->point + 0.5 * umbilicRoom * umbilic->d1;
+  else if (farthest) seed = farthest->point;
+  if (seed) tried.push_back(umbilic ? umbilic->point : *seed);
+  return seed;
+}
+
+// L0 of a later system: the flow line through `start` as baseCurve samples it, cut where it comes within a cell
+// of laid vertices (the run of free samples nearest the start is kept, unrolled if the loop was cut), or
+// nullopt when fewer than three samples are free.
+std::optional<Row> Laying::seedCurve(const SurfacePoint& start, const Vec3& initial) {
+  Row row;
+  std::vector<double> arcs;
+  traceBase(start, initial, row, arcs);
+  const int n = static_cast<int>(arcs.size());
+  if (n < 3) return std::nullopt;
+  std::vector<SurfacePoint> points;
+  std::vector<char> free(n);
+  int nearest = 0;
+  for (int i = 0; i < n; ++i) {
+    points.push_back(pointAtArc(walker_, row.curve, row.curveArc, row.closed, row.curveLength, arcs[i]));
+    free[i] = !collides(points.back().point(), kSeedClearance * o_.cell);
+    if ((points[i].point() - start.point()).squaredNorm() < (points[nearest].point() - start.point()).squaredNorm()) nearest = i;
+  }
+  if (!free[nearest]) return std::nullopt;
+  std::vector<int> keep;
+  if (row.closed && std::all_of(free.begin(), free.end(), [](char c) { return c != 0; })) {
+    for (int i = 0; i < n; ++i) keep.push_back(i);
+  } else {
+    int first = nearest, last = nearest;
+    auto wrap = [&](int i) { return row.closed ? ((i % n) + n) % n : i; };
+    while (last - first + 1 < n && (row.closed || first > 0) && free[wrap(first - 1)]) --first;
+    while (last - first + 1 < n && (row.closed || last + 1 < n) && free[wrap(last + 1)]) ++last;
+    for (int i = first; i <= last; ++i) keep.push_back(i);
+    if (row.closed) {
+      // Unrolled, with arcs increasing from the first kept sample (as layLayer unrolls a cut loop).
+      std::vector<double> unrolled;
+      for (int i : keep) unrolled.push_back(arcs[wrap(i)] + (i < 0 ? -row.curveLength : i >= n ? row.curveLength : 0.0));
+      if (unrolled.front() < 0)
+        for (double& a : unrolled) a += row.curveLength;
+      for (int& i : keep) i = wrap(i);
+      row.closed = false;
+      row.curveLength = 0;
+      arcs.assign(unrolled.begin(), unrolled.end());
+    } else {
+      arcs.assign(arcs.begin() + first, arcs.begin() + last + 1);
+    }
+  }
+  if (keep.size() < 3) return std::nullopt;
+  for (int i : keep) row.ids.push_back(addVertex(points[i], std::numeric_limits<double>::quiet_NaN()));
+  row.sampleArc = arcs;
+  std::vector<Vec3> line;
+  for (int i : keep) line.push_back(points[i].point());
+  fieldLines_.push_back(line);
+  if (o_.method == LayingMethod::Progressive) setOwnCurve(row);
+  return row;
+}
+
+// Closes the gaps left where systems of rows (and split fronts) met, with triangles between their boundary
+// vertices only: no new vertex, so the seams carry irregular vertices but nothing sliver-thin. Each boundary
+// edge a -> b (laid triangles on its left) looks for the boundary vertex q on its right making the roundest
+// triangle with edges up to kFillEdge cells and angles of at least 30 degrees; the best such triangles are
+// added first, if their new edges cross no edge and enclose no vertex (in the tangent plane), they lie on the
+// surface (their centroid not beyond its boundary) and no directed edge is used twice; then the boundary is
+// searched again. A vertex left pinched between two gaps (two fans meeting at it) loses its gap triangles.
+// Returns how many triangles it added.
+int Laying::fillGaps() {
+  int nv = static_cast<int>(vertices_.size());
+  const double reach = kFillEdgeWide * o_.cell;  // the farthest any tier looks
+  std::unordered_set<std::int64_t> edges, open;  // every directed edge; those without their reverse
+  std::vector<std::vector<int>> incident(nv);
+  std::vector<char> used(nv, 0);
+  // Passes are stamped; a vertex keeps the stamp of the pass that last gave it a triangle, and an edge that found
+  // no triangle in a pass is looked at again only once a vertex near it has changed since.
+  int stamp = 0;
+  std::vector<int> touched(nv, 0);
+  auto addEdges = [&](int t) {
+    const Eigen::Vector3i& tri = triangles_[t];
+    for (int c = 0; c < 3; ++c) {
+      const int x = tri(c), y = tri((c + 1) % 3);
+      edges.insert(edgeKey(x, y));
+      if (!open.erase(edgeKey(y, x))) open.insert(edgeKey(x, y));
+      incident[tri(c)].push_back(t);
+      used[tri(c)] = 1;
+      touched[tri(c)] = stamp;
+    }
+  };
+  for (int t = 0; t < static_cast<int>(triangles_.size()); ++t) addEdges(t);
+  auto has = [&](int a, int b) { return edges.count(edgeKey(a, b)) > 0; };
+  auto boundary = [&](int a, int b) { return has(a, b) && !has(b, a); };
+  PointGrid grid(reach);
+  for (int v = 0; v < nv; ++v)
+    if (used[v]) grid.insert(v, vertices_[v].point());
+  auto at = [&](int v) -> const Vec3& { return vertices_[v].point(); };
+
+  struct Candidate {
+    double sine;
+    int a, b, q;
+  };
+  // The triangle (b, a, q) on the right of the boundary edge a -> b, if it may be added now with angles whose
+  // sine is at least minSine and edges up to maxEdge.
+  double minSine = kFillSine, maxEdge = kFillEdge * o_.cell;
+  auto shaped = [&](int a, int b, int q, double& sine) {
+    if (q == a || q == b || has(a, q) || has(q, b)) return false;
+    const Vec3 n = (vertices_[a].g.normal + vertices_[b].g.normal + vertices_[q].g.normal).normalized();
+    const Vec3 &A = at(a), &B = at(b), &Q = at(q);
+    if ((A - B).cross(Q - B).dot(n) <= 0) return false;  // not on the right of a -> b, seen from the normal
+    const double ab = (B - A).norm(), aq = (Q - A).norm(), bq = (Q - B).norm();
+    if (std::max({ab, aq, bq}) > maxEdge) return false;
+    const double twiceArea = (A - B).cross(Q - B).norm();
+    sine = std::min({twiceArea / (ab * aq), twiceArea / (ab * bq), twiceArea / (aq * bq)});
+    return sine >= minSine;
+  };
+  // ... and whether it would cross no edge and cover no vertex, on the surface.
+  auto clear = [&](int a, int b, int q) {
+    const Vec3 n = (vertices_[a].g.normal + vertices_[b].g.normal + vertices_[q].g.normal).normalized();
+    const Vec3 &A = at(a), &B = at(b), &Q = at(q);
+    // In the plane through the centroid across n: no edge crossed, no vertex inside.
+    const Vec3 c = (A + B + Q) / 3;
+    const Vec3 e1 = (B - A - (B - A).dot(n) * n).normalized(), e2 = n.cross(e1);
+    auto flat = [&](const Vec3& x) { return Vec2((x - c).dot(e1), (x - c).dot(e2)); };
+    const Vec2 a2 = flat(A), b2 = flat(B), q2 = flat(Q);
+    bool clear = true;
+    grid.forNear(c, reach, [&](int x) {
+      if (!clear || x == a || x == b || x == q) return;
+      const Vec3& X = at(x);
+      if (std::abs((X - c).dot(n)) > reach) return;
+      const Vec2 x2 = flat(X);
+      if (cross2(b2 - a2, x2 - a2) <= 0 && cross2(q2 - b2, x2 - b2) <= 0 && cross2(a2 - q2, x2 - q2) <= 0) clear = false;
+      for (int t : incident[x]) {
+        for (int k = 0; k < 3 && clear; ++k) {
+          const int u = triangles_[t](k), w = triangles_[t]((k + 1) % 3);
+          const Vec2 u2 = flat(at(u)), w2 = flat(at(w));
+          if (u != a && u != q && w != a && w != q && segmentsCross(a2, q2, u2, w2)) clear = false;
+          if (u != b && u != q && w != b && w != q && segmentsCross(b2, q2, u2, w2)) clear = false;
+        }
+      }
+    });
+    if (!clear) return false;
+    const SurfacePoint foot = walker_.project(c, vertices_[a]);
+    return !walker_.isOutside(c, foot) && (foot.point() - c).norm() < 0.5 * reach;
+  };
+  auto admissible = [&](int a, int b, int q, double& sine) { return shaped(a, b, q, sine) && clear(a, b, q); };
+
+  // Whether the right of a -> b lies beyond the surface boundary (the edge runs along it).
+  auto alongBoundary = [&](int a, int b) {
+    const Vec3 n = (vertices_[a].g.normal + vertices_[b].g.normal).normalized();
+    const Vec3 x = 0.5 * (at(a) + at(b)) + 0.5 * o_.cell * (at(b) - at(a)).cross(n).normalized();
+    return walker_.isOutside(x, walker_.project(x, vertices_[a]));
+  };
+  // The boundary edges, in a fixed order (the hash set's differs between standard libraries).
+  auto openEdges = [&]() {
+    std::vector<std::int64_t> list(open.begin(), open.end());
+    std::sort(list.begin(), list.end());
+    return list;
+  };
+  std::unordered_map<std::int64_t, int> failed[3];  // per kind of pass: edge -> the pass it found nothing in
+  auto worthLooking = [&](int kind, int a, int b) {
+    const auto it = failed[kind].find(edgeKey(a, b));
+    if (it == failed[kind].end()) return true;
+    bool changed = false;
+    grid.forNear(0.5 * (at(a) + at(b)), reach, [&](int v) { changed = changed || touched[v] > it->second; });
+    return changed;
+  };
+  std::unordered_map<std::int64_t, bool> outside;  // alongBoundary, once per edge
+  // One pass of triangles on laid vertices: the best candidate of every boundary edge, best first.
+  auto connect = [&](bool interiorOnly) {
+    const int kind = interiorOnly ? 1 : 0;
+    ++stamp;
+    std::vector<Candidate> candidates;
+    for (const std::int64_t e : openEdges()) {
+        const int a = static_cast<int>(e >> 32), b = static_cast<int>(e & 0xFFFFFFFF);
+        if (interiorOnly) {
+          const auto it = outside.find(e);
+          if (it == outside.end() ? (outside[e] = alongBoundary(a, b)) : it->second) continue;
+        }
+        if (!worthLooking(kind, a, b)) continue;
+        std::vector<Candidate> shapes;
+        grid.forNear(0.5 * (at(a) + at(b)), maxEdge, [&](int q) {
+          double sine = 0;
+          if (shaped(a, b, q, sine)) shapes.push_back({sine, a, b, q});
+        });
+        std::sort(shapes.begin(), shapes.end(),
+                  [](const Candidate& x, const Candidate& y) { return x.sine != y.sine ? x.sine > y.sine : x.q < y.q; });
+        Candidate best{0, a, b, -1};
+        for (const Candidate& k : shapes)
+          if (clear(a, b, k.q)) {
+            best = k;
+            break;
+          }
+        if (best.q >= 0) candidates.push_back(best);
+        else failed[kind][e] = stamp;
+      }
+    std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
+      return x.sine != y.sine ? x.sine > y.sine : std::tie(x.a, x.b) < std::tie(y.a, y.b);
+    });
+    int added = 0;
+    for (const Candidate& k : candidates) {
+      double sine = 0;
+      if (!boundary(k.a, k.b) || !admissible(k.a, k.b, k.q, sine)) continue;
+      triangles_.emplace_back(k.b, k.a, k.q);
+      addEdges(static_cast<int>(triangles_.size()) - 1);
+      ++added;
+    }
+    return added;
+  };
+  // One pass of new vertices: where no laid vertex will do (a gap wider than kFillEdge cells), the apex of the
+  // equilateral triangle on a boundary edge, on the surface and at least kFillClearance cells from every vertex.
+  auto insert = [&]() {
+    int inserted = 0;
+    ++stamp;
+    for (const std::int64_t e : openEdges()) {
+        const int a = static_cast<int>(e >> 32), b = static_cast<int>(e & 0xFFFFFFFF);
+        if (!boundary(a, b) || !worthLooking(2, a, b)) continue;
+        failed[2][e] = stamp;  // whatever happens: a success closes the edge
+        const Vec3 n = (vertices_[a].g.normal + vertices_[b].g.normal).normalized();
+        const Vec3 along = at(b) - at(a), right = along.cross(n).normalized();
+        const double side = std::clamp(along.norm(), 0.8 * o_.cell, 1.2 * o_.cell);
+        const Vec3 x = 0.5 * (at(a) + at(b)) + kEquilateralRatio * side * right;
+        const SurfacePoint p = walker_.project(x, vertices_[a]);
+        if (walker_.isOutside(x, p) || (p.point() - x).norm() > 0.5 * o_.cell) continue;
+        bool crowded = false;  // by vertices of triangles (a laid vertex in none does not count)
+        grid.forNear(p.point(), kFillClearance * o_.cell, [&](int v) {
+          crowded = crowded || (used[v] && (vertices_[v].point() - p.point()).norm() < kFillClearance * o_.cell);
+        });
+        if (crowded) continue;
+        const int q = static_cast<int>(vertices_.size());
+        vertices_.push_back(p);
+        incident.emplace_back();
+        used.push_back(0);
+        touched.push_back(stamp);
+        double sine = 0;
+        const bool fits = admissible(a, b, q, sine);
+        vertices_.pop_back();
+        incident.pop_back();
+        used.pop_back();
+        touched.pop_back();
+        if (!fits) continue;
+        addVertex(p, std::numeric_limits<double>::quiet_NaN());
+        incident.emplace_back();
+        used.push_back(0);
+        touched.push_back(stamp);
+        grid.insert(q, p.point());
+        triangles_.emplace_back(b, a, q);
+        addEdges(static_cast<int>(triangles_.size()) - 1);
+        ++inserted;
+      }
+    return inserted;
+  };
+
+  const int laid = static_cast<int>(triangles_.size());
+  for (int sweep = 0; sweep < 256; ++sweep) {
+    checkCancel(cancel_);
+    minSine = kFillSine, maxEdge = kFillEdge * o_.cell;
+    if (connect(false) > 0 || insert() > 0) continue;
+    // What is left inside the surface (holes, notches) closes with blunter triangles. Slivers would close the
+    // last slits and three- or four-sided holes too, but their stars are invalid and their Dupin hexagons fold
+    // (bumps at 5000 faces: 92 invalid stars left instead of 53, 60 folded faces instead of 55).
+    minSine = kFillSineBlunt, maxEdge = kFillEdgeWide * o_.cell;
+    if (connect(true) == 0) break;
+  }
+  // Pinched vertices: more boundary edges leave them than one fan has.
+  nv = static_cast<int>(vertices_.size());
+  for (int round = 0; round < 8; ++round) {
+    std::vector<int> out(nv, 0);
+    for (int t = 0; t < static_cast<int>(triangles_.size()); ++t)
+      for (int k = 0; k < 3; ++k)
+        if (!has(triangles_[t]((k + 1) % 3), triangles_[t](k))) ++out[triangles_[t](k)];
+    std::vector<Eigen::Vector3i> kept(triangles_.begin(), triangles_.begin() + laid);
+    bool dropped = false;
+    for (int t = laid; t < static_cast<int>(triangles_.size()); ++t) {
+      const Eigen::Vector3i& tri = triangles_[t];
+      if (out[tri(0)] > 1 || out[tri(1)] > 1 || out[tri(2)] > 1) dropped = true;
+      else kept.push_back(tri);
+    }
+    if (!dropped) break;
+    triangles_ = std::move(kept);
+    edges.clear();
+    open.clear();
+    for (auto& list : incident) list.clear();
+    for (int t = 0; t < static_cast<int>(triangles_.size()); ++t) addEdges(t);
+  }
+  // Flips of the seams' edges (an edge of a triangle added here) that leave fewer triangles failing Prop. 4 / 5
+  // in the stars of the four corners concerned: the seams' triangles are not laid along conjugate directions,
+  // and which diagonal a quad of them takes decides whether its corners' stars are valid.
+  auto failing = [&](int v) {
+    if (!used[v]) return 0;
+    const LocalGeometry& g = vertices_[v].g;
+    int bad = 0;
+    for (int t : incident[v]) {
+      const Eigen::Vector3i& tri = triangles_[t];
+      int k = 0;
+      while (tri(k) != v) ++k;
+      bad += !starIsValid(g, {Vec2(0, 0), toTangentPlane(g, at(tri((k + 1) % 3))), toTangentPlane(g, at(tri((k + 2) % 3)))});
+    }
+    return bad;
+  };
+  auto upright = [&](int x, int y, int z) {
+    const Vec3 n = vertices_[x].g.normal + vertices_[y].g.normal + vertices_[z].g.normal;
+    const Vec3 e = at(y) - at(x), f = at(z) - at(x);
+    const double area2 = e.cross(f).dot(n) / n.norm();
+    const double longest = std::max({e.squaredNorm(), f.squaredNorm(), (at(z) - at(y)).squaredNorm()});
+    return area2 > 0.3 * longest;  // no sliver: its height at least 0.3 of its longest edge
+  };
+  auto detach = [&](int t) {
+    for (int k = 0; k < 3; ++k) {
+      std::vector<int>& list = incident[triangles_[t](k)];
+      list.erase(std::find(list.begin(), list.end(), t));
+      edges.erase(edgeKey(triangles_[t](k), triangles_[t]((k + 1) % 3)));
+    }
+  };
+  auto attach = [&](int t) {
+    for (int k = 0; k < 3; ++k) {
+      incident[triangles_[t](k)].push_back(t);
+      edges.insert(edgeKey(triangles_[t](k), triangles_[t]((k + 1) % 3)));
+    }
+  };
+  for (int sweep = 0; sweep < 8; ++sweep) {
+    int flipped = 0;
+    for (int t1 = laid; t1 < static_cast<int>(triangles_.size()); ++t1)
+      for (int k = 0; k < 3; ++k) {
+        const int x = triangles_[t1](k), y = triangles_[t1]((k + 1) % 3), p = triangles_[t1]((k + 2) % 3);
+        if (!has(y, x)) continue;
+        int t2 = -1;
+        for (int t : incident[y])
+          for (int j = 0; j < 3; ++j)
+            if (triangles_[t](j) == y && triangles_[t]((j + 1) % 3) == x) t2 = t;
+        if (t2 < 0) continue;
+        int j = 0;
+        while (triangles_[t2](j) != y) ++j;
+        const int q = triangles_[t2]((j + 2) % 3);
+        if (q == p || has(p, q) || has(q, p) || !upright(x, q, p) || !upright(q, y, p)) continue;
+        const int before = failing(x) + failing(y) + failing(p) + failing(q);
+        if (before == 0) continue;
+        const Eigen::Vector3i old1 = triangles_[t1], old2 = triangles_[t2];
+        detach(t1);
+        detach(t2);
+        triangles_[t1] = Eigen::Vector3i(x, q, p);
+        triangles_[t2] = Eigen::Vector3i(q, y, p);
+        attach(t1);
+        attach(t2);
+        if (failing(x) + failing(y) + failing(p) + failing(q) < before) {
+          ++flipped;
+          break;  // t1 changed: on to the next triangle
+        }
+        detach(t1);
+        detach(t2);
+        triangles_[t1] = old1;
+        triangles_[t2] = old2;
+        attach(t1);
+        attach(t2);
+      }
+    if (flipped == 0) break;
+  }
+  return static_cast<int>(triangles_.size()) - laid;
+}
+
+Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
+  Row L0 = baseCurve(start, initial);
+  laySystem(L0);
+  std::vector<Vec3> tried;
+  std::vector<std::string> seeds;
+  for (int attempt = 0; attempt < kMaxSeeds && layers_ < o_.maxLayers; ++attempt) {
+    const std::optional<Vec3> seed = uncoveredSeed(tried);
+    if (!seed) break;
+    const SurfacePoint p = walker_.project(*seed);
+    std::optional<Vec3> d = field_.direction(p, F_);
+    if (!d) continue;  // a singularity of the field: the next seed lies elsewhere
+    const std::optional<Row> L = seedCurve(p, *d);
+    if (!L) continue;
+    laySystem(*L);
+    seeds.push_back(describe(walker_, p));
+  }
+  if (systems_ > 1) gapTriangles_ = fillGaps();
   if (triangles_.empty())
     cannotTile(start, "no layer of triangles could be laid from the base curve (every apex fell outside the "
                       "surface); choose a smaller cell or another start");
@@ -1096,6 +1640,7 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
   for (int k = 0; k < static_cast<int>(triangles_.size()); ++k)
     for (int c = 0; c < 3; ++c) t.mesh.F(k, c) = index[triangles_[k](c)];
   t.fieldLines = std::move(fieldLines_);
+  t.systems = systems_;
 
   std::ostringstream s;
   s << layingMethodName(o_.method) << " conjugation, field " << fieldSpecName(field_.spec()) << ", base curves along "
@@ -1124,6 +1669,14 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
                                  std::to_string(asymptoticStops_) + " segments, first near " + firstAsymptoticStop_ +
                                  "; those fronts stopped there (the prespecified method keeps rows on the field)");
   note(layers_ >= o_.maxLayers, "stopped at maxLayers = " + std::to_string(o_.maxLayers));
+  if (!seeds.empty()) {
+    std::string list;
+    for (const std::string& p : seeds) list += (list.empty() ? "" : ", ") + p;
+    t.notes.push_back(std::to_string(seeds.size()) + " more systems of rows laid from regions the first left uncovered " +
+                      "(no one family of rows reaches them), from L0s through " + list +
+                      "; seams of irregular vertices where the systems meet (" + std::to_string(gapTriangles_) +
+                      " triangles close the gaps between them)");
+  }
   for (const std::string& z : zipNotes_) t.notes.push_back(z);
   return t;
 }

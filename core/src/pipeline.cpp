@@ -386,21 +386,26 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
     }
   }
   t.check = checkTriangulation(t.triangulation, *t.surface);
-  if (t.check.coverage >= 0 && t.check.coverage < 0.8) {
+  const bool partial = t.check.coverage >= 0 && t.check.coverage < 0.8;
+  if (partial)
     t.triangulation.notes.push_back("the triangulation covers only " + std::to_string(int(std::round(100 * t.check.coverage))) +
                                     " % of the surface: its layers stopped short (see the notes above); another "
                                     "field, method or start point may cover more");
-    if (t.field == "principal") {
-      const std::optional<Vec3> umbilic = umbilicWithinCurvedPart(*t.surface);
-      if (umbilic) {
-        std::ostringstream s;
-        s << "the principal directions turn around an umbilic (k1 = k2) near (" << umbilic->x() << ", "
-          << umbilic->y() << ", " << umbilic->z() << "): the curvature lines have a singularity there, and §5.2's "
-             "methods need a regular conjugate network (§7). Around a bump whose parabolic curve closes into a "
-             "ring no such network exists; tile such a surface in patches, or choose a field without the "
-             "singularity where there is one (e.g. param on a height field that is elliptic throughout)";
-        t.triangulation.notes.push_back(s.str());
-      }
+  if ((partial || t.triangulation.systems > 1) && t.field == "principal") {
+    const std::optional<Vec3> umbilic = umbilicWithinCurvedPart(*t.surface);
+    if (umbilic) {
+      std::ostringstream s;
+      s << "the principal directions turn around an umbilic (k1 = k2) near (" << umbilic->x() << ", "
+        << umbilic->y() << ", " << umbilic->z() << "): the curvature lines have a singularity there, and §5.2's "
+           "methods need a regular conjugate network (§7). Around a bump whose parabolic curve closes into a "
+           "ring no such network exists; ";
+      if (t.triangulation.systems > 1)
+        s << "the rows were laid as " << t.triangulation.systems
+          << " systems, each from its own base curve, with seams of irregular vertices where they meet";
+      else
+        s << "tile such a surface in patches, or choose a field without the singularity where there is one (e.g. "
+             "param on a height field that is elliptic throughout)";
+      t.triangulation.notes.push_back(s.str());
     }
   }
   return t;

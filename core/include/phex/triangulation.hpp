@@ -16,6 +16,9 @@ struct Triangulation {
   std::vector<Vec2> uv;  // #V parameters when laid in the parameter domain of a ParametricSurface; else empty
   std::vector<std::vector<Vec3>> fieldLines;  // curves the method traced (base curves, conjugate lines), for display
   std::vector<std::string> notes;             // what the method had to do, e.g. where a lower bound acted
+  // Systems of rows laid (layTriangulation): more than one where the rows from L0 left much of the surface
+  // uncovered (no one family of rows reaches it, e.g. around a second bump) and seams join them.
+  int systems = 1;
 };
 
 // The local geometry at every vertex: exact from `uv` on a parametric surface, else from closestPoint.
