@@ -1340,8 +1340,22 @@ int Laying::fillGaps() {
   auto at = [&](int v) -> const Vec3& { return vertices_[v].point(); };
 
   struct Candidate {
-    double sine;
+    double sine;  // the smallest angle's sine, plus one per corner whose star the triangle keeps valid
     int a, b, q;
+  };
+  // How many corners of the triangle (b, a, q) would find it valid as the fundamental triangle of their star
+  // (Props 4, 5), or cannot judge it (K = 0): the seams' triangles follow no conjugate directions, so among
+  // shapes alike the ones valid at more corners go first.
+  auto validCorners = [&](int a, int b, int q) {
+    const std::array<int, 3> c = {b, a, q};
+    int valid = 0;
+    for (int k = 0; k < 3; ++k) {
+      const LocalGeometry& g = vertices_[c[k]].g;
+      const StarValidity v =
+          starValidity(g, {Vec2(0, 0), toTangentPlane(g, at(c[(k + 1) % 3])), toTangentPlane(g, at(c[(k + 2) % 3]))});
+      valid += !v.judged || v.valid;
+    }
+    return valid;
   };
   // The triangle (b, a, q) on the right of the boundary edge a -> b, if it may be added now with angles whose
   // sine is at least minSine and edges up to maxEdge.
@@ -1424,7 +1438,7 @@ int Laying::fillGaps() {
         std::vector<Candidate> shapes;
         grid.forNear(0.5 * (at(a) + at(b)), maxEdge, [&](int q) {
           double sine = 0;
-          if (shaped(a, b, q, sine)) shapes.push_back({sine, a, b, q});
+          if (shaped(a, b, q, sine)) shapes.push_back({sine + validCorners(a, b, q), a, b, q});
         });
         std::sort(shapes.begin(), shapes.end(),
                   [](const Candidate& x, const Candidate& y) { return x.sine != y.sine ? x.sine > y.sine : x.q < y.q; });
@@ -1459,10 +1473,19 @@ int Laying::fillGaps() {
         const int a = static_cast<int>(e >> 32), b = static_cast<int>(e & 0xFFFFFFFF);
         if (!boundary(a, b) || !worthLooking(2, a, b)) continue;
         failed[2][e] = stamp;  // whatever happens: a success closes the edge
+        // The apex of the ideal triangle on a -> b (§5.1), on its right, with the §5.3 lower bound on the step;
+        // equilateral where there is none (K = 0, a base along an asymptotic direction, an exploding step).
         const Vec3 n = (vertices_[a].g.normal + vertices_[b].g.normal).normalized();
         const Vec3 along = at(b) - at(a), right = along.cross(n).normalized();
         const double side = std::clamp(along.norm(), 0.8 * o_.cell, 1.2 * o_.cell);
-        const Vec3 x = 0.5 * (at(a) + at(b)) + kEquilateralRatio * side * right;
+        Vec3 x = 0.5 * (at(a) + at(b)) + kEquilateralRatio * side * right;
+        const SurfacePoint m = walker_.project(0.5 * (at(a) + at(b)), vertices_[a]);
+        const Vec2 a2 = toTangentPlane(m.g, at(a)), b2 = toTangentPlane(m.g, at(b));
+        const IdealApex ideal = idealApex(m.g, a2, b2, Side::Right);
+        if (ideal.ok() && ideal.step <= o_.maxStepRatio * (b2 - a2).norm()) {
+          const double ratio = stepLowerBound(ideal.step / (b2 - a2).norm(), o_.lowerBound);
+          x = fromTangentPlane(m.g, 0.5 * (a2 + b2) + ratio * side * ideal.direction);
+        }
         const SurfacePoint p = walker_.project(x, vertices_[a]);
         if (walker_.isOutside(x, p) || (p.point() - x).norm() > 0.5 * o_.cell) continue;
         bool crowded = false;  // by vertices of triangles (a laid vertex in none does not count)
