@@ -202,6 +202,7 @@ val resultToJs(const phex::PipelineResult& r) {
   solve.set("displacementMax", r.solve.displacementMax);
   solve.set("surfaceFitted", r.solve.surfaceFitted);
   solve.set("boundaryPanelsSplit", r.boundaryPanelsSplit);
+  solve.set("interiorFacesSplit", r.interiorFacesSplit);
   solve.set("surfaceDistanceBefore", r.solve.surfaceDistanceBefore);
   solve.set("surfaceDistanceAfter", r.solve.surfaceDistanceAfter);
   val log = val::array();

@@ -275,7 +275,8 @@ function showStats({ metrics, solve, timings, method, field, triangulation }) {
   $('regularity-mean').textContent = metrics.regularityMean === undefined ? '–' : metrics.regularityMean.toFixed(3);
   $('surface-distance').textContent = Number.isFinite(metrics.surfaceDistanceMax) ? `${fmt(metrics.surfaceDistanceMax)} max` : '–';
   $('iterations').textContent = `${solve.iterations}${solve.converged ? '' : ' (not converged)'}${
-    solve.boundaryPanelsSplit ? `, ${solve.boundaryPanelsSplit} boundary panel${solve.boundaryPanelsSplit > 1 ? 's' : ''} split` : ''}`;
+    solve.boundaryPanelsSplit ? `, ${solve.boundaryPanelsSplit} boundary panel${solve.boundaryPanelsSplit > 1 ? 's' : ''} split` : ''}${
+    solve.interiorFacesSplit ? `, ${solve.interiorFacesSplit} interior face${solve.interiorFacesSplit > 1 ? 's' : ''} split` : ''}`;
   $('timings').textContent = Object.entries(timings)
     .filter(([stage]) => stage !== 'total')
     .map(([stage, t]) => `${stage} ${ms(t)}`)

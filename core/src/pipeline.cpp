@@ -433,13 +433,20 @@ double polygonCrosses(const Points& V, const std::vector<int>& ids) {
 // edge points ended on either side of its triangle point) are cut in two along the diagonal that leaves the
 // pieces simple and most nearly planar, in `r.hex` and `r.initial` alike; the dual's bookkeeping follows
 // (both pieces belong to the same vertex). Where an interior face away from such panels is off planar too,
-// only the crossing panels are cut (cutting the others would not help). `resolve` says whether solving
-// again can reach the tolerance: a panel off planar was cut and no interior face away from it is off.
+// and at most kFewInteriorOff interior faces are off in all, each of them is cut the same way: the solve
+// stopped short there because only folding would make them planar (on the uploaded wave roof at 100k
+// faces, a pentagon and two hexagons where a row along the boundary was resampled close to the parabolic
+// curve: the pentagon needle-thin, the edge between the hexagons shrunk to nothing, every further step
+// folding one of them). Those touching a panel are cut too: cutting only the panel left one there folded.
+// Where more are off, only the crossing panels are cut (cutting the others would not help). `resolve` says
+// whether solving again can reach the tolerance: a face off planar was cut and no interior face away from
+// the panels is left off uncut. With `crossingOnly` (after the last solve) only the crossing panels are cut.
+constexpr int kFewInteriorOff = 8;
 struct PanelCut {
-  int panels = 0;
+  int panels = 0, interior = 0;  // boundary panels and interior faces cut
   bool resolve = false;
 };
-PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance) {
+PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingOnly) {
   std::vector<char> cut(r.hex.faceCount(), 0), crossing(r.hex.faceCount(), 0), held(r.hex.V.rows(), 0);
   std::vector<int> interiorOff;
   int count = 0;
@@ -457,17 +464,21 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance) {
     offPlanarCut = offPlanarCut || offPlanar;
     for (int k = 0; k < r.hex.faceSize(f); ++k) held[r.hex.face(f)[k]] = 1;
   }
-  bool away = false;  // an interior face off planar away from the panels: only the crossing ones are cut
+  std::vector<int> away;  // interior faces off planar away from the panels
   for (int f : interiorOff) {
     bool touches = false;
     for (int k = 0; k < r.hex.faceSize(f); ++k) touches = touches || held[r.hex.face(f)[k]];
-    away = away || !touches;
+    if (!touches) away.push_back(f);
   }
-  if (away) {
+  int interior = 0;
+  const bool few = interiorOff.size() <= static_cast<std::size_t>(kFewInteriorOff);
+  if (crossingOnly || (!away.empty() && !few)) {  // only the crossing panels
     count = 0;
     for (int f = 0; f < r.hex.faceCount(); ++f) cut[f] = crossing[f], count += crossing[f];
+  } else if (!away.empty()) {
+    for (int f : interiorOff) cut[f] = 1, ++interior;
   }
-  if (count == 0) return {};
+  if (count + interior == 0) return {};
   PolyMesh hex;  // the new faces; r.initial (and the dual's copy of it) take the same ones
   hex.V = r.hex.V;
   std::vector<int> faceVertex;
@@ -502,7 +513,7 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance) {
   r.hex = std::move(hex);
   r.dual.faceVertex = std::move(faceVertex);
   r.dual.boundaryFace = std::move(boundary);
-  return {count, offPlanarCut && !away};
+  return {count, interior, !crossingOnly && (offPlanarCut || interior > 0) && (away.empty() || few)};
 }
 
 }  // namespace
@@ -543,12 +554,14 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   po.fitSurface = params.fitSurface;
   po.surface = &surface;
   r.solve = planarize(r.hex, po, progress, cancel);
-  // Boundary panels that stay off planar or cross themselves are cut in two and the solve goes on from there
-  // (twice at most).
-  for (int round = 0; round < 2 && params.splitBoundaryPanels; ++round) {
-    const PanelCut cut = splitBoundaryPanels(r, po.tolerance);
+  // Boundary panels that stay off planar or cross themselves (and a few interior faces left off planar) are
+  // cut in two and the solve goes on from there (twice at most); after the last solve, panels it left
+  // crossing themselves are cut once more.
+  for (int round = 0; round < 3 && params.splitBoundaryPanels; ++round) {
+    const PanelCut cut = splitBoundaryPanels(r, po.tolerance, round == 2);
     r.boundaryPanelsSplit += cut.panels;
-    if (!cut.resolve) break;
+    r.interiorFacesSplit += cut.interior;
+    if (!cut.resolve || round == 2) break;
     // Again from lambda = 1, now anchored at the positions reached (starting at the small lambda the first
     // solve ended with took as long on the uploaded wave roof at 10k faces, 12 iterations against 14).
     const PlanarizeReport first = r.solve;

@@ -64,7 +64,7 @@ Options of `phex run`:
                             exactly planar) to bring the vertices closer to the surface (default on)
   --split-boundary on|off   a boundary panel left off planar (every face away from it planar), or one
                             that crosses itself, is cut in two along its best diagonal and the solve
-                            goes on (default on)
+                            goes on; so are up to 8 interior faces left off planar (default on)
   --out FILE                write the P-Hex mesh (for triangulate: the triangulation, OBJ)
   --format obj|ply|json     output format (default from the extension, else obj); json carries
                             the per-face metrics
@@ -190,7 +190,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"displacementMax", r.solve.displacementMax},
           {"dualFallbacks", r.dual.fallbackCount},
           {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
-                      {"boundaryPanelsSplit", r.boundaryPanelsSplit}, {"log", log}}},
+                      {"boundaryPanelsSplit", r.boundaryPanelsSplit}, {"interiorFacesSplit", r.interiorFacesSplit},
+                      {"log", log}}},
           {"surfaceFit", {{"applied", r.solve.surfaceFitted}, {"distanceBefore", r.solve.surfaceDistanceBefore},
                           {"distanceAfter", r.solve.surfaceDistanceAfter}}},
           {"milliseconds", timings},

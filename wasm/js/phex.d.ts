@@ -159,6 +159,8 @@ export interface SolveReport {
   surfaceFitted: boolean;
   /** Boundary panels cut in two to become planar (`splitBoundary: 'on'`); each piece is a face of `hex`. */
   boundaryPanelsSplit?: number;
+  /** Interior faces cut in two the same way: a few left off planar where only folding would make them planar. */
+  interiorFacesSplit?: number;
   /** Largest node distance to the surface over its bounding-box diagonal, before and after that shift. */
   surfaceDistanceBefore: number;
   surfaceDistanceAfter: number;
@@ -265,7 +267,8 @@ export interface RunParams {
    * 'on' (default): a boundary panel the solve leaves off planar, while every face away from it is planar
    * (where a boundary meets a parabolic curve a panel can have no planar shape that does not fold), or one
    * that crosses itself, is cut in two along its best diagonal and the solve goes on
-   * (`solve.boundaryPanelsSplit`). 'off': not.
+   * (`solve.boundaryPanelsSplit`); so are a few interior faces (at most 8) left off planar where only
+   * folding would make them planar (`solve.interiorFacesSplit`). 'off': not.
    */
   splitBoundary?: 'on' | 'off';
   /**

@@ -63,7 +63,9 @@ struct PipelineParams {
   bool fitSurface = true;          // once planar, shift the face planes towards the surface (PlanarizeOptions::fitSurface)
   // A boundary panel the solve leaves off planar (while every face away from it is planar), or one that
   // crosses itself, is cut in two along its best diagonal and the solve goes on where that can reach the
-  // tolerance; PipelineResult::boundaryPanelsSplit counts them.
+  // tolerance; PipelineResult::boundaryPanelsSplit counts them. Where a few interior faces (at most 8) are
+  // left off planar away from such panels too (only folding would make them planar), those are cut the
+  // same way (PipelineResult::interiorFacesSplit).
   bool splitBoundaryPanels = true;
 };
 
@@ -89,6 +91,7 @@ struct PipelineResult {
   double interiorHexagonFraction = 0.0;  // hexagons among the faces not on the boundary (dual.boundaryFace)
   PlanarizeReport solve;
   int boundaryPanelsSplit = 0;  // boundary panels cut in two to become planar (PipelineParams::splitBoundaryPanels)
+  int interiorFacesSplit = 0;   // interior faces cut in two the same way (only folding would make them planar)
   std::vector<StageTiming> timings;
   double totalMilliseconds = 0.0;
 };
