@@ -8,6 +8,17 @@
 
 using namespace phex;
 
+namespace {
+
+// An analytic surface sampled by its lattice at about `faces` hexagons (two triangles each), as uploaded OBJ bytes.
+MeshInput sampledUpload(const std::string& surface, int faces) {
+  const ParametricSurfacePtr s = makeSurface(surface);
+  const std::string obj = toObj(latticeTriangulation(*s, cellForFaceCount(*s, faces)).mesh);
+  return MeshInput{std::vector<std::uint8_t>(obj.begin(), obj.end()), "obj", surface + ".obj"};
+}
+
+}  // namespace
+
 TEST_CASE("pipeline: the torus default reaches planarity 1e-9 with no invalid face") {
   PipelineParams p;  // torus, 2000 faces, progressive conjugation, Dupin duality, local solver
   int progressCalls = 0;
@@ -54,11 +65,8 @@ TEST_CASE("pipeline: subdivision of the icosahedron control gives 12 pentagons (
 
 TEST_CASE("pipeline: an uploaded mesh is tiled, a broken one is named") {
   // A torus patch sampled as OBJ text, uploaded as bytes.
-  const ParametricSurfacePtr torus = makeSurface("torus");
-  const Triangulation sample = latticeTriangulation(*torus, cellForFaceCount(*torus, 6000));
-  const std::string obj = toObj(sample.mesh);
   PipelineParams p;
-  p.mesh = MeshInput{std::vector<std::uint8_t>(obj.begin(), obj.end()), "obj", "torus.obj"};
+  p.mesh = sampledUpload("torus", 6000);
   p.faces = 800;
   const PipelineResult r = runPipeline(p);
   CHECK(r.metrics.faceCount > 400);
@@ -69,7 +77,7 @@ TEST_CASE("pipeline: an uploaded mesh is tiled, a broken one is named") {
   CHECK_THROWS_WITH(runPipeline(p), Catch::Contains("torus.obj"));
   p.mesh->bytes.clear();
   CHECK_THROWS_WITH(runPipeline(p), Catch::Contains("empty"));
-  p.mesh = MeshInput{std::vector<std::uint8_t>(obj.begin(), obj.end()), "obj", "torus.obj"};
+  p.mesh = sampledUpload("torus", 6000);
   p.method = TriangulationMethod::Lattice;
   CHECK_THROWS_WITH(runPipeline(p), Catch::Contains("lattice"));
 }
@@ -261,11 +269,8 @@ TEST_CASE("pipeline: a few interior faces left off planar away from the boundary
   // faces: the solve stops short with five interior faces off planar, some away from every boundary panel,
   // where only folding would make them planar. They are cut along their best diagonals, and the solve goes
   // on to the tolerance without folding a face.
-  const ParametricSurfacePtr cyclide = makeSurface("cyclide");
-  const Triangulation sample = latticeTriangulation(*cyclide, cellForFaceCount(*cyclide, 30000));
-  const std::string obj = toObj(sample.mesh);
   PipelineParams p;
-  p.mesh = MeshInput{std::vector<std::uint8_t>(obj.begin(), obj.end()), "obj", "cyclide.obj"};
+  p.mesh = sampledUpload("cyclide", 30000);
   p.faces = 1500;
   p.splitBoundaryPanels = false;
   const PipelineResult whole = runPipeline(p);
