@@ -143,6 +143,7 @@ val resultToJs(const phex::PipelineResult& r) {
   val notes = val::array();
   for (const std::string& n : r.triangulation.notes) notes.call<void>("push", n);
   tri.set("notes", notes);
+  tri.set("systems", r.triangulation.systems);
   const phex::TriangulationCheck& c = r.check;
   val check = val::object();
   check.set("interiorVertices", c.interiorVertices);

@@ -129,6 +129,7 @@ json triangulationJson(const phex::Triangulation& t, const phex::TriangulationCh
           {"invalidStars", c.invalidStars},
           {"parabolicStars", c.parabolicStars.size()},
           {"coverage", c.coverage},
+          {"systems", t.systems},
           {"edgeLength", {{"min", c.edgeMin}, {"max", c.edgeMax}, {"mean", c.edgeMean}}},
           {"notes", t.notes}};
 }

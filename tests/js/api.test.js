@@ -288,6 +288,16 @@ test("splitBoundary: 'on' cuts boundary panels left off planar and reaches the g
   assert.ok(after.metrics.planarityMax <= 1e-9);
 });
 
+test('the bumps are laid in several systems of rows and say so', async () => {
+  // No one regular conjugate network reaches both bumps: further systems cover what the first left.
+  const r = await phex.run({ surface: 'freeform', faces: 1000 });
+  assert.ok(r.triangulation.systems > 1, String(r.triangulation.systems));
+  assert.ok(r.triangulation.check.coverage > 0.85, String(r.triangulation.check.coverage));
+  assert.ok(r.triangulation.notes.some((n) => /more systems of rows/.test(n)));
+  const roof = await phex.run({ surface: 'wave-roof', faces: 1000 });
+  assert.equal(roof.triangulation.systems, 1);
+});
+
 test('start and direction set where and which way the base curve runs; bad ones are named', async () => {
   const outer = await phex.run({ surface: 'torus', method: 'prespecified', faces: 800, start: [1.4, 0, 0], direction: [0, 1, 0] });
   assert.match(outer.triangulation.notes[0], /L0 closed/);

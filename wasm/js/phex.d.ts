@@ -53,6 +53,11 @@ export interface Triangulation {
   fieldLines?: Polylines;
   /** What the method had to do: lower bound active, steps re-used across parabolic curves, stars repaired, ... */
   notes: string[];
+  /**
+   * Systems of rows laid, each from its own base curve: more than 1 where the rows from the first left much
+   * of the surface uncovered (round bumps, where no one regular conjugate network exists), with seams between.
+   */
+  systems: number;
   /** Propositions 4/5 on every star (§4.2), valences, edge lengths, coverage. */
   check: TriangulationCheck;
 }
