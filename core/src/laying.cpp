@@ -1313,7 +1313,7 @@ std::optional<Row> Laying::seedCurve(const SurfacePoint& start, const Vec3& init
 int Laying::fillGaps() {
   int nv = static_cast<int>(vertices_.size());
   const double reach = kFillEdgeWide * o_.cell;  // the farthest any tier looks
-  std::unordered_set<std::int64_t> edges, open;  // every directed edge; those without their reverse
+  std::unordered_set<std::int64_t> open;  // the directed edges without their reverse
   std::vector<std::vector<int>> incident(nv);
   std::vector<char> used(nv, 0);
   // Passes are stamped; a vertex keeps the stamp of the pass that last gave it a triangle, and an edge that found
@@ -1324,7 +1324,6 @@ int Laying::fillGaps() {
     const Eigen::Vector3i& tri = triangles_[t];
     for (int c = 0; c < 3; ++c) {
       const int x = tri(c), y = tri((c + 1) % 3);
-      edges.insert(edgeKey(x, y));
       if (!open.erase(edgeKey(y, x))) open.insert(edgeKey(x, y));
       incident[tri(c)].push_back(t);
       used[tri(c)] = 1;
@@ -1332,7 +1331,12 @@ int Laying::fillGaps() {
     }
   };
   for (int t = 0; t < static_cast<int>(triangles_.size()); ++t) addEdges(t);
-  auto has = [&](int a, int b) { return edges.count(edgeKey(a, b)) > 0; };
+  auto has = [&](int a, int b) {  // whether a triangle has the directed edge a -> b
+    for (int t : incident[a])
+      for (int k = 0; k < 3; ++k)
+        if (triangles_[t](k) == a && triangles_[t]((k + 1) % 3) == b) return true;
+    return false;
+  };
   auto boundary = [&](int a, int b) { return has(a, b) && !has(b, a); };
   PointGrid grid(reach);
   for (int v = 0; v < nv; ++v)
@@ -1380,17 +1384,25 @@ int Laying::fillGaps() {
     const Vec3 e1 = (B - A - (B - A).dot(n) * n).normalized(), e2 = n.cross(e1);
     auto flat = [&](const Vec3& x) { return Vec2((x - c).dot(e1), (x - c).dot(e2)); };
     const Vec2 a2 = flat(A), b2 = flat(B), q2 = flat(Q);
+    const Vec2 lo = a2.cwiseMin(b2).cwiseMin(q2), hi = a2.cwiseMax(b2).cwiseMax(q2);
     bool clear = true;
     grid.forNear(c, reach, [&](int x) {
-      if (!clear || x == a || x == b || x == q) return;
+      if (!clear) return;
       const Vec3& X = at(x);
       if (std::abs((X - c).dot(n)) > reach) return;
       const Vec2 x2 = flat(X);
-      if (cross2(b2 - a2, x2 - a2) <= 0 && cross2(q2 - b2, x2 - b2) <= 0 && cross2(a2 - q2, x2 - q2) <= 0) clear = false;
+      if (x != a && x != b && x != q && cross2(b2 - a2, x2 - a2) <= 0 && cross2(q2 - b2, x2 - b2) <= 0 &&
+          cross2(a2 - q2, x2 - q2) <= 0)
+        clear = false;
+      // Every edge once: from its start, or from its end when it has no twin (its start may be out of reach).
       for (int t : incident[x]) {
         for (int k = 0; k < 3 && clear; ++k) {
           const int u = triangles_[t](k), w = triangles_[t]((k + 1) % 3);
-          const Vec2 u2 = flat(at(u)), w2 = flat(at(w));
+          if (u != x && (w != x || open.count(edgeKey(u, w)) == 0)) continue;
+          const Vec2 u2 = u == x ? x2 : flat(at(u)), w2 = w == x ? x2 : flat(at(w));
+          if (std::max(u2.x(), w2.x()) < lo.x() || std::min(u2.x(), w2.x()) > hi.x() ||
+              std::max(u2.y(), w2.y()) < lo.y() || std::min(u2.y(), w2.y()) > hi.y())
+            continue;
           if (u != a && u != q && w != a && w != q && segmentsCross(a2, q2, u2, w2)) clear = false;
           if (u != b && u != q && w != b && w != q && segmentsCross(b2, q2, u2, w2)) clear = false;
         }
@@ -1544,7 +1556,6 @@ int Laying::fillGaps() {
     }
     if (!dropped) break;
     triangles_ = std::move(kept);
-    edges.clear();
     open.clear();
     for (auto& list : incident) list.clear();
     for (int t = 0; t < static_cast<int>(triangles_.size()); ++t) addEdges(t);
@@ -1575,13 +1586,11 @@ int Laying::fillGaps() {
     for (int k = 0; k < 3; ++k) {
       std::vector<int>& list = incident[triangles_[t](k)];
       list.erase(std::find(list.begin(), list.end(), t));
-      edges.erase(edgeKey(triangles_[t](k), triangles_[t]((k + 1) % 3)));
     }
   };
   auto attach = [&](int t) {
     for (int k = 0; k < 3; ++k) {
       incident[triangles_[t](k)].push_back(t);
-      edges.insert(edgeKey(triangles_[t](k), triangles_[t]((k + 1) % 3)));
     }
   };
   for (int sweep = 0; sweep < 8; ++sweep) {
