@@ -26,6 +26,7 @@ constexpr double kMinConjugateSine = 0.15;
 constexpr double kNearParabolic = 0.1;  // kmin / kmax below which a point counts as near a parabolic curve
 constexpr double kResampleBelow = 0.55, kResampleAbove = 1.8;  // row spacing / cell that triggers a resample
 constexpr double kResampleLimit = 2.5;  // ... even at a parabolic curve
+constexpr double kResampleReach = 1.5;  // a resampled vertex lies within this many spacings (cells) of an apex
 // A row whose spacing grew counts as at a parabolic curve for resampling where kmin / kmax is below this (on
 // a fifth of it): the pentagons and heptagons a resample leaves fold as Dupin hexagons even a little off the
 // curve. At 0.1 (kNearParabolic) a sampled 12k-triangle torus folded 4-5 faces at 700, 800 and 900 faces and
@@ -910,6 +911,12 @@ bool Laying::zipIfMeeting(std::size_t f, double& stepScale) {
   const bool unsplit = fronts_.size() - systemFront0_ == 2;  // the two fronts of this system's L0, neither split yet
   for (std::size_t k = 0; k < fronts_.size() && gap > 0; ++k) {
     if (k == f || !fronts_[k].active) continue;
+    // Two loops meet only as about equal loops around a tube; a loop shrunk onto an umbilic is no partner for
+    // the ring around it (zipped all around, their triangles would span the region between them).
+    if (fronts_[f].row.closed && fronts_[k].row.closed) {
+      const std::size_t n = fronts_[f].row.ids.size(), m = fronts_[k].row.ids.size();
+      if (std::min(n, m) < 3 || 2 * std::min(n, m) < std::max(n, m)) continue;
+    }
     if (!unsplit || fronts_[f].row.closed != fronts_[k].row.closed) {
       if (facing(fronts_[f], fronts_[k])) gap = 0, nearest = k;
       continue;
@@ -988,6 +995,17 @@ void Laying::layLayer(std::size_t f, double stepScale) {
     } else if (apexes[i] && (systems_ > 1 || shrunk) && overlapsLaid(A.ids[i], A.ids[(i + 1) % count], apexes[i]->p)) {
       apexes[i].reset();
       ++collisions_;
+    }
+  // A loop closing onto an umbilic can lay two neighbouring apexes onto each other (its fitted curve no
+  // longer follows the apexes there): the second is dropped.
+  if (A.closed && o_.method == LayingMethod::Prespecified)
+    for (int i = 0; i < n; ++i) {
+      const int j = (i + 1) % n;
+      if (j != i && apexes[i] && apexes[j] &&
+          (apexes[i]->p.point() - apexes[j]->p.point()).norm() < 0.2 * std::min(segments[i].base, segments[j].base)) {
+        apexes[j].reset();
+        ++collisions_;
+      }
     }
   // A later system's rows may also turn over on themselves (a small ring around an umbilic shrinking onto it):
   // an apex whose triangles would face against the surface normal is dropped.
@@ -1122,6 +1140,7 @@ void Laying::layLayer(std::size_t f, double stepScale) {
       parabolic += kmax > 0 && std::min(std::abs(a.p.g.k1), std::abs(a.p.g.k2)) < nearParabolic * kmax;
     }
     const bool atParabolic = 5 * parabolic > length && spacing < kResampleLimit * o_.cell;
+    bool resampled = false;
     if (curveUsable && !atParabolic && (spacing < kResampleBelow * o_.cell || spacing > kResampleAbove * o_.cell)) {
       // The row's spacing drifted far from the cell: re-sample it evenly along its curve, zip it to the base.
       double ratio = 0;
@@ -1139,16 +1158,44 @@ void Laying::layLayer(std::size_t f, double stepScale) {
       for (int k = 0; closedRun && m <= kShrunkLoop && k < m; ++k)
         for (int j = k + 1; j < m; ++j) folded = folded || (points[k].point() - points[j].point()).norm() < 0.25 * span / m;
       if (folded) continue;
-      for (const SurfacePoint& p : points) C.ids.push_back(addVertex(p, ratio, height));
-      C.sampleArc = arcs;
-      zip(below, closedRun, C.ids, closedRun);
-      if (!resampled_++) {
-        std::ostringstream where;
-        where << describe(walker_, vertices_[C.ids[C.ids.size() / 2]]) << " (spacing " << spacing / o_.cell
-              << " cell, " << length << " -> " << m << " vertices)";
-        firstResample_ = where.str();
+      // The fitted curve may also run off where the apexes are not (a loop traced around another region; zipped
+      // to it, the base would fan across the gap): then the row is resampled along the apexes' own polyline.
+      bool faithful = true;
+      const double reach = kResampleReach * std::max(o_.cell, spacing);
+      for (const SurfacePoint& p : points) {
+        double nearest = std::numeric_limits<double>::infinity();
+        for (const Apex& a : run) nearest = std::min(nearest, (a.p.point() - p.point()).squaredNorm());
+        faithful = faithful && nearest <= reach * reach;
       }
-    } else {
+      if (!faithful && length >= 2) {
+        C.curve.clear();
+        for (const Apex& a : run) C.curve.push_back(a.p);
+        C.curveArc = cumulativeArc(C.curve);
+        C.curveLength = C.curveArc.back() + (closedRun ? (C.curve.back().point() - C.curve.front().point()).norm() : 0.0);
+        C.closed = closedRun;
+        const double own = closedRun ? C.curveLength : C.curveArc.back();
+        const int k = closedRun ? std::max(3, static_cast<int>(std::lround(own / o_.cell)))
+                                : std::max(2, static_cast<int>(std::lround(own / o_.cell)) + 1);
+        arcs.clear();
+        points.clear();
+        for (int j = 0; j < k; ++j) arcs.push_back(own * j / (closedRun ? k : k - 1));
+        for (double t : arcs) points.push_back(pointAtArc(walker_, C.curve, C.curveArc, C.closed, C.curveLength, t));
+        faithful = true;
+      }
+      if (faithful) {
+        for (const SurfacePoint& p : points) C.ids.push_back(addVertex(p, ratio, height));
+        C.sampleArc = arcs;
+        zip(below, closedRun, C.ids, closedRun);
+        resampled = true;
+        if (!resampled_++) {
+          std::ostringstream where;
+          where << describe(walker_, vertices_[C.ids[C.ids.size() / 2]]) << " (spacing " << spacing / o_.cell
+                << " cell, " << length << " -> " << points.size() << " vertices)";
+          firstResample_ = where.str();
+        }
+      }
+    }
+    if (!resampled) {
       for (int k = 0; k < length; ++k) C.ids.push_back(addVertex(run[k].p, run[k].ratio, heights[k]));
       for (int k = 0; k < length; ++k) {
         const int i = (first + k) % n;
