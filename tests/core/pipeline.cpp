@@ -234,6 +234,24 @@ TEST_CASE("pipeline: a surface with umbilics is laid in several systems, and the
   for (const std::string& n : roof.triangulation.notes) CHECK(n.find("umbilic") == std::string::npos);
 }
 
+TEST_CASE("pipeline: the uploaded bumps are laid without rows fanned across a region or stacked on each other") {
+  // Sampled as 120k triangles (as the benchmark does), the bumps' rings around an umbilic shrink onto it: a
+  // shrunk loop was zipped all around to the ring outside it, and a row resampled onto a fitted loop traced
+  // around another region, so triangles spanned the region between (planarity 0.14 and a vertex 6.5 % of the
+  // diagonal off the surface at 1000 faces).
+  PipelineParams p;
+  p.mesh = sampledUpload("freeform", 60000);
+  p.faces = 1000;
+  const PipelineResult r = runPipeline(p);
+  INFO("planarity " << r.metrics.planarityMax << ", distance " << r.metrics.surfaceDistanceMax << ", edges "
+                    << r.check.edgeMean << " .. " << r.check.edgeMax);
+  CHECK(r.triangulation.systems > 1);
+  CHECK(r.check.coverage > 0.85);
+  CHECK(r.check.edgeMax < 4 * r.check.edgeMean);
+  CHECK(r.metrics.planarityMax < 0.02);
+  CHECK(r.metrics.surfaceDistanceMax < 0.005);
+}
+
 TEST_CASE("pipeline: a boundary panel left off planar is cut in two, and the solve reaches the tolerance") {
   // On the helicoid at 5000 faces a few boundary panels where rows reach the rims have no planar shape that
   // does not fold; every interior face becomes planar.
