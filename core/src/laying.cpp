@@ -256,7 +256,7 @@ class Laying {
   Row baseCurve(const SurfacePoint& start, const Vec3& initial);
   std::optional<Row> seedCurve(const SurfacePoint& start, const Vec3& initial);
   void laySystem(const Row& L0);
-  std::optional<Vec3> uncoveredSeed(std::vector<Vec3>& tried) const;
+  std::optional<Vec3> uncoveredSeed(const std::vector<LocalGeometry>& samples, std::vector<Vec3>& tried) const;
   int fillGaps();
   bool zipIfMeeting(std::size_t f, double& stepScale);
   struct RowOffset {
@@ -347,8 +347,6 @@ void Laying::setOwnCurve(Row& row) const {
   row.sampleArc = row.curveArc;
 }
 
-// L0: the flow line of D_F through the start, both ways to the boundary or once around a loop, sampled every
-// cell from the start.
 // The flow line of D_F through the start, both ways to the boundary or once around a loop (row.curve, closed,
 // arcs), and the arc lengths every cell from the start where L0's samples go; returns how the line ended.
 FlowLine::End Laying::traceBase(const SurfacePoint& start, const Vec3& initial, Row& row, std::vector<double>& arcs) const {
@@ -374,6 +372,8 @@ FlowLine::End Laying::traceBase(const SurfacePoint& start, const Vec3& initial, 
   return forward.end;
 }
 
+// L0: the flow line of D_F through the start, both ways to the boundary or once around a loop, sampled every
+// cell from the start.
 Row Laying::baseCurve(const SurfacePoint& start, const Vec3& initial) {
   Row row;
   std::vector<double> arcs;
@@ -1145,13 +1145,20 @@ void Laying::layLayer(std::size_t f, double stepScale) {
       // The row's spacing drifted far from the cell: re-sample it evenly along its curve, zip it to the base.
       double ratio = 0;
       for (const Apex& a : run) ratio += a.ratio / length;
-      const double span = closedRun ? C.curveLength : C.sampleArc.back() - C.sampleArc.front();
-      const int m = closedRun ? std::max(3, static_cast<int>(std::lround(span / o_.cell)))
-                              : std::max(2, static_cast<int>(std::lround(span / o_.cell)) + 1);
+      // Samples about a cell apart over `span` of C's curve from `from` (a loop's whole length when closedRun).
       std::vector<double> arcs;
-      for (int k = 0; k < m; ++k) arcs.push_back(C.sampleArc.front() + span * k / (closedRun ? m : m - 1));
       std::vector<SurfacePoint> points;
-      for (double t : arcs) points.push_back(pointAtArc(walker_, C.curve, C.curveArc, C.closed, C.curveLength, t));
+      auto spread = [&](double from, double span) {
+        const int m = closedRun ? std::max(3, static_cast<int>(std::lround(span / o_.cell)))
+                                : std::max(2, static_cast<int>(std::lround(span / o_.cell)) + 1);
+        arcs.clear();
+        points.clear();
+        for (int k = 0; k < m; ++k) arcs.push_back(from + span * k / (closedRun ? m : m - 1));
+        for (double t : arcs) points.push_back(pointAtArc(walker_, C.curve, C.curveArc, C.closed, C.curveLength, t));
+      };
+      const double span = closedRun ? C.curveLength : C.sampleArc.back() - C.sampleArc.front();
+      spread(C.sampleArc.front(), span);
+      const int m = static_cast<int>(points.size());
       // A loop fitted around an umbilic can fold back on itself (points of it nearly coincide): the front
       // stops there instead of laying a fan onto doubled vertices, and the cap is left to the gap filling.
       bool folded = false;
@@ -1173,13 +1180,7 @@ void Laying::layLayer(std::size_t f, double stepScale) {
         C.curveArc = cumulativeArc(C.curve);
         C.curveLength = C.curveArc.back() + (closedRun ? (C.curve.back().point() - C.curve.front().point()).norm() : 0.0);
         C.closed = closedRun;
-        const double own = closedRun ? C.curveLength : C.curveArc.back();
-        const int k = closedRun ? std::max(3, static_cast<int>(std::lround(own / o_.cell)))
-                                : std::max(2, static_cast<int>(std::lround(own / o_.cell)) + 1);
-        arcs.clear();
-        points.clear();
-        for (int j = 0; j < k; ++j) arcs.push_back(own * j / (closedRun ? k : k - 1));
-        for (double t : arcs) points.push_back(pointAtArc(walker_, C.curve, C.curveArc, C.closed, C.curveLength, t));
+        spread(0.0, closedRun ? C.curveLength : C.curveArc.back());
         faithful = true;
       }
       if (faithful) {
@@ -1223,7 +1224,6 @@ void Laying::layLayer(std::size_t f, double stepScale) {
   for (std::size_t k = 1; k < produced.size(); ++k) fronts_.push_back(std::move(produced[k]));
 }
 
-// Lays one system of rows: L0's two fronts and the fronts they split into, until none is active.
 void Laying::addTriangle(int a, int b, int c) {
   if (systems_ > 1) {
     const std::int64_t e[3] = {edgeKey(a, b), edgeKey(b, c), edgeKey(c, a)};
@@ -1233,6 +1233,7 @@ void Laying::addTriangle(int a, int b, int c) {
   triangles_.emplace_back(a, b, c);
 }
 
+// Lays one system of rows: L0's two fronts and the fronts they split into, until none is active.
 void Laying::laySystem(const Row& L0) {
   systemFront0_ = fronts_.size();
   if (++systems_ == 2) {
@@ -1265,8 +1266,7 @@ void Laying::laySystem(const Row& L0) {
 // stops. The middle of the largest region it left uncovered — the sample of the surface farthest from every
 // laid vertex (and from the seeds tried before), when that is at least kSeedHole cells away — seeds the next
 // system, whose rows stop where they meet the laid ones (the collision test); nullopt when there is none.
-std::optional<Vec3> Laying::uncoveredSeed(std::vector<Vec3>& tried) const {
-  const std::vector<LocalGeometry> samples = walker_.surface().samples(kSeedSamples);
+std::optional<Vec3> Laying::uncoveredSeed(const std::vector<LocalGeometry>& samples, std::vector<Vec3>& tried) const {
   std::vector<Vec3> covered;
   std::vector<const LocalGeometry*> open;
   for (const LocalGeometry& g : samples) {
@@ -1349,14 +1349,15 @@ std::optional<Row> Laying::seedCurve(const SurfacePoint& start, const Vec3& init
   return row;
 }
 
-// Closes the gaps left where systems of rows (and split fronts) met, with triangles between their boundary
-// vertices only: no new vertex, so the seams carry irregular vertices but nothing sliver-thin. Each boundary
-// edge a -> b (laid triangles on its left) looks for the boundary vertex q on its right making the roundest
-// triangle with edges up to kFillEdge cells and angles of at least 30 degrees; the best such triangles are
+// Closes the gaps left where systems of rows (and split fronts) met. Each boundary edge a -> b (laid triangles
+// on its left) looks for the boundary vertex q on its right making the roundest triangle with edges up to
+// kFillEdge cells and angles of at least 30 degrees (valid at more corners first); the best such triangles are
 // added first, if their new edges cross no edge and enclose no vertex (in the tangent plane), they lie on the
 // surface (their centroid not beyond its boundary) and no directed edge is used twice; then the boundary is
-// searched again. A vertex left pinched between two gaps (two fans meeting at it) loses its gap triangles.
-// Returns how many triangles it added.
+// searched again. Where no laid vertex will do, a new vertex goes to the edge's ideal apex; holes left inside
+// the surface close with blunter triangles. A vertex left pinched between two gaps (two fans meeting at it)
+// loses its gap triangles, and the seams' edges are flipped where that makes more stars valid. Returns how
+// many triangles it added.
 int Laying::fillGaps() {
   int nv = static_cast<int>(vertices_.size());
   const double reach = kFillEdgeWide * o_.cell;  // the farthest any tier looks
@@ -1378,12 +1379,13 @@ int Laying::fillGaps() {
     }
   };
   for (int t = 0; t < static_cast<int>(triangles_.size()); ++t) addEdges(t);
-  auto has = [&](int a, int b) {  // whether a triangle has the directed edge a -> b
+  auto triangleWith = [&](int a, int b) {  // the triangle with the directed edge a -> b, or -1
     for (int t : incident[a])
       for (int k = 0; k < 3; ++k)
-        if (triangles_[t](k) == a && triangles_[t]((k + 1) % 3) == b) return true;
-    return false;
+        if (triangles_[t](k) == a && triangles_[t]((k + 1) % 3) == b) return t;
+    return -1;
   };
+  auto has = [&](int a, int b) { return triangleWith(a, b) >= 0; };
   auto boundary = [&](int a, int b) { return has(a, b) && !has(b, a); };
   PointGrid grid(reach);
   for (int v = 0; v < nv; ++v)
@@ -1523,8 +1525,8 @@ int Laying::fillGaps() {
     }
     return added;
   };
-  // One pass of new vertices: where no laid vertex will do (a gap wider than kFillEdge cells), the apex of the
-  // equilateral triangle on a boundary edge, on the surface and at least kFillClearance cells from every vertex.
+  // One pass of new vertices: where no laid vertex will do (a gap wider than kFillEdge cells), a vertex at the
+  // apex of a boundary edge, on the surface and at least kFillClearance cells from every vertex.
   auto insert = [&]() {
     int inserted = 0;
     ++stamp;
@@ -1559,15 +1561,14 @@ int Laying::fillGaps() {
         touched.push_back(stamp);
         double sine = 0;
         const bool fits = admissible(a, b, q, sine);
-        vertices_.pop_back();
-        incident.pop_back();
-        used.pop_back();
-        touched.pop_back();
-        if (!fits) continue;
+        vertices_.pop_back();  // addVertex puts it back with the rest of the laying's bookkeeping
+        if (!fits) {
+          incident.pop_back();
+          used.pop_back();
+          touched.pop_back();
+          continue;
+        }
         addVertex(p, std::numeric_limits<double>::quiet_NaN());
-        incident.emplace_back();
-        used.push_back(0);
-        touched.push_back(stamp);
         grid.insert(q, p.point());
         triangles_.emplace_back(b, a, q);
         addEdges(static_cast<int>(triangles_.size()) - 1);
@@ -1645,11 +1646,7 @@ int Laying::fillGaps() {
     for (int t1 = laid; t1 < static_cast<int>(triangles_.size()); ++t1)
       for (int k = 0; k < 3; ++k) {
         const int x = triangles_[t1](k), y = triangles_[t1]((k + 1) % 3), p = triangles_[t1]((k + 2) % 3);
-        if (!has(y, x)) continue;
-        int t2 = -1;
-        for (int t : incident[y])
-          for (int j = 0; j < 3; ++j)
-            if (triangles_[t](j) == y && triangles_[t]((j + 1) % 3) == x) t2 = t;
+        const int t2 = triangleWith(y, x);
         if (t2 < 0) continue;
         int j = 0;
         while (triangles_[t2](j) != y) ++j;
@@ -1685,8 +1682,10 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
   laySystem(L0);
   std::vector<Vec3> tried;
   std::vector<std::string> seeds;
+  std::vector<LocalGeometry> samples;  // of the surface, taken once for all the seeds
   for (int attempt = 0; attempt < kMaxSeeds && layers_ < o_.maxLayers; ++attempt) {
-    const std::optional<Vec3> seed = uncoveredSeed(tried);
+    if (samples.empty()) samples = walker_.surface().samples(kSeedSamples);
+    const std::optional<Vec3> seed = uncoveredSeed(samples, tried);
     if (!seed) break;
     const SurfacePoint p = walker_.project(*seed);
     std::optional<Vec3> d = field_.direction(p, F_);

@@ -464,18 +464,18 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
     offPlanarCut = offPlanarCut || offPlanar;
     for (int k = 0; k < r.hex.faceSize(f); ++k) held[r.hex.face(f)[k]] = 1;
   }
-  std::vector<int> away;  // interior faces off planar away from the panels
+  bool away = false;  // an interior face off planar away from the panels
   for (int f : interiorOff) {
     bool touches = false;
     for (int k = 0; k < r.hex.faceSize(f); ++k) touches = touches || held[r.hex.face(f)[k]];
-    if (!touches) away.push_back(f);
+    away = away || !touches;
   }
   int interior = 0;
   const bool few = interiorOff.size() <= static_cast<std::size_t>(kFewInteriorOff);
-  if (crossingOnly || (!away.empty() && !few)) {  // only the crossing panels
+  if (crossingOnly || (away && !few)) {  // only the crossing panels
     count = 0;
     for (int f = 0; f < r.hex.faceCount(); ++f) cut[f] = crossing[f], count += crossing[f];
-  } else if (!away.empty()) {
+  } else if (away) {
     for (int f : interiorOff) cut[f] = 1, ++interior;
   }
   if (count + interior == 0) return {};
@@ -513,7 +513,7 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
   r.hex = std::move(hex);
   r.dual.faceVertex = std::move(faceVertex);
   r.dual.boundaryFace = std::move(boundary);
-  return {count, interior, !crossingOnly && (offPlanarCut || interior > 0) && (away.empty() || few)};
+  return {count, interior, !crossingOnly && (offPlanarCut || interior > 0) && (!away || few)};
 }
 
 }  // namespace
