@@ -225,6 +225,7 @@ val resultToJs(const phex::PipelineResult& r) {
   timings.set("total", r.totalMilliseconds);
   out.set("timings", timings);
   out.set("dualFallbacks", r.dual.fallbackCount);
+  out.set("dualUntangled", r.dual.untangled);
   out.set("method", std::string(phex::triangulationMethodName(r.method)));
   out.set("field", r.field);
   return out;

@@ -245,10 +245,63 @@ DualMesh assembleDual(const TriMesh& T, const Points& U, const std::vector<Local
 
 namespace {
 
+// Interior faces of a Dupin dual that cross themselves: their stars straddle a parabolic curve, where no
+// indicatrix judges the triangles (Props 4, 5 do not apply) and the points of neighbouring triangles are
+// taken in different ways (a Dupin centre, the tangent planes' meeting point kept at the centroid along the
+// zero-curvature direction). Each corner point of such a face tries the other placements of its triangle —
+// the tangent planes' point with that direction kept or left free, and the centroid — and keeps the one
+// under which fewest of the faces through it cross themselves, if fewer than now. Returns how many points
+// moved.
+int untangleDual(DualMesh& dual, const TriMesh& T, const std::vector<LocalGeometry>& geo) {
+  PolyMesh& M = dual.mesh;
+  const int nvd = static_cast<int>(M.V.rows()), nfd = M.faceCount();
+  std::vector<std::vector<int>> facesAt(nvd);
+  for (int f = 0; f < nfd; ++f)
+    for (int k = 0; k < M.faceSize(f); ++k) facesAt[M.face(f)[k]].push_back(f);
+  auto crossingAt = [&](int i) {
+    int n = 0;
+    for (int f : facesAt[i]) n += faceSelfIntersects(M, f);
+    return n;
+  };
+  int moved = 0;
+  for (int sweep = 0; sweep < 4; ++sweep) {
+    int changed = 0;
+    for (int f = 0; f < nfd; ++f) {
+      if (dual.boundaryFace[f] || !faceSelfIntersects(M, f)) continue;
+      for (int k = 0; k < M.faceSize(f); ++k) {
+        const int i = M.face(f)[k], t = dual.vertexTriangle[i];
+        if (t < 0) continue;
+        const TriangleFrame fr = frameOf(geo, T, t);
+        std::array<Vec3, 3> candidates;
+        int n = 0;
+        Vec3 x = fr.centroid;
+        if (tangentPoint(geo, T, t, fr, x)) candidates[n++] = x;
+        x = fr.centroid;
+        if (tangentPoint(geo, T, t, fr, x, kStraddlingPlanes)) candidates[n++] = x;
+        candidates[n++] = fr.centroid;
+        const Vec3 now = M.V.row(i).transpose();
+        int best = crossingAt(i);
+        Vec3 bestPoint = now;
+        for (int c = 0; c < n && best > 0; ++c) {
+          M.V.row(i) = candidates[c].transpose();
+          const int crossing = crossingAt(i);
+          if (crossing < best) best = crossing, bestPoint = candidates[c];
+        }
+        M.V.row(i) = bestPoint.transpose();
+        if (bestPoint != now) ++changed;
+        if (!faceSelfIntersects(M, f)) break;
+      }
+    }
+    moved += changed;
+    if (changed == 0) break;
+  }
+  return moved;
+}
+
 // The dual mesh with every triangle's point placed by `place(f, frame, x)`, which returns false where it fell
 // back to the centroid (x is then the centroid).
 template <typename Place>
-DualMesh dualWith(const Triangulation& tri, const Surface& surface, Place place) {
+DualMesh dualWith(const Triangulation& tri, const Surface& surface, Place place, bool untangle = false) {
   const TriMesh& T = tri.mesh;
   const int nf = static_cast<int>(T.F.rows());
   const std::vector<LocalGeometry> geo = vertexGeometry(tri, surface);
@@ -260,12 +313,14 @@ DualMesh dualWith(const Triangulation& tri, const Surface& surface, Place place)
     fallbacks += !place(geo, f, fr, x);
     U.row(f) = x.transpose();
   }
-  return assembleDual(T, U, geo, fallbacks);
+  DualMesh dual = assembleDual(T, U, geo, fallbacks);
+  if (untangle) dual.untangled = untangleDual(dual, T, geo);
+  return dual;
 }
 
 }  // namespace
 
-DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
+DualMesh dupinDual(const Triangulation& tri, const Surface& surface, bool untangle) {
   const TriMesh& T = tri.mesh;
   return dualWith(tri, surface, [&](const std::vector<LocalGeometry>& geo, int f, const TriangleFrame& fr, Vec3& x) {
     const LocalGeometry* g[3] = {&geo[T.F(f, 0)], &geo[T.F(f, 1)], &geo[T.F(f, 2)]};
@@ -310,7 +365,7 @@ DualMesh dupinDual(const Triangulation& tri, const Surface& surface) {
     }
     // Where the Dupin conic is undefined the tangent planes may still meet well; §6's centroid is the last resort.
     return tangentPoint(geo, T, f, fr, x);
-  });
+  }, untangle);
 }
 
 DualMesh tangentDual(const Triangulation& tri, const Surface& surface) {

@@ -213,7 +213,8 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
       return std::nullopt;  // this start cannot be laid from; the others may
     }
     const TriangulationCheck check = checkTriangulation(t, surface);
-    const int folded = measure(dupinDual(t, surface).mesh).selfIntersectingCount;
+    // The dual as §6 builds it, without untangling: the count judges the triangulation.
+    const int folded = measure(dupinDual(t, surface, false).mesh).selfIntersectingCount;
     const double bad = double(check.invalidStars.size() + folded) / std::max<Eigen::Index>(t.mesh.V.rows(), 1);
     return std::make_pair((check.coverage >= 0 ? check.coverage : 1.0) - 5 * bad, double(t.mesh.V.rows()));
   };

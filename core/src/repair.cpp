@@ -392,17 +392,165 @@ class Repair {
   bool movedPosition_ = false;
 };
 
+// Edge flips around the stars the moves left invalid: which diagonal a quad of two triangles takes decides
+// whether its four corners' stars are valid, and where rows meet at an angle (seams between systems, zipped
+// fronts, resampled rows) no position of the vertices makes up for the wrong one. An interior edge of a
+// triangle at an invalid star is flipped when that leaves fewer of the four corners' stars failing Prop. 4 /
+// 5 (or as many, with fewer failing triangles), both new triangles stand upright over the surface with a
+// height of at least kFlipHeight of their longest edge, no vertex drops below valence 4 and none rises
+// above 8. Stars are judged at their own vertex's geometry, parabolic or planar ones not at all (as
+// checkTriangulation). Returns how many edges were flipped.
+constexpr double kFlipHeight = 0.3;
+int flipAtInvalidStars(Triangulation& t, const Surface& surface) {
+  TriMesh& T = t.mesh;
+  const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
+  const std::vector<LocalGeometry> geo = vertexGeometry(t, surface);
+  const double edgeMean = T.meanEdgeLength();
+  std::vector<std::vector<int>> incident(nv);
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) incident[T.F(f, k)].push_back(f);
+  std::vector<char> judgeable(nv, 0);
+  for (int v = 0; v < nv; ++v) {
+    const PointType type = classify(geo[v], 1e-6, edgeMean);
+    judgeable[v] = type == PointType::Elliptic || type == PointType::Hyperbolic;
+  }
+  auto at = [&](int v) -> Vec3 { return T.V.row(v).transpose(); };
+  auto triangleWith = [&](int a, int b) {  // the triangle with the directed edge a -> b, or -1
+    for (int f : incident[a])
+      for (int k = 0; k < 3; ++k)
+        if (T.F(f, k) == a && T.F(f, (k + 1) % 3) == b) return f;
+    return -1;
+  };
+  // Whether v's fan closes around it (an interior vertex): every edge out of v has its twin.
+  auto closed = [&](int v) {
+    for (int f : incident[v]) {
+      int k = 0;
+      while (T.F(f, k) != v) ++k;
+      if (triangleWith(T.F(f, (k + 2) % 3), v) < 0) return false;
+    }
+    return !incident[v].empty();
+  };
+  auto failing = [&](int v) {
+    if (!judgeable[v] || !closed(v)) return 0;
+    const LocalGeometry& g = geo[v];
+    int bad = 0;
+    for (int f : incident[v]) {
+      int k = 0;
+      while (T.F(f, k) != v) ++k;
+      bad += !starIsValid(g, {Vec2(0, 0), toTangentPlane(g, at(T.F(f, (k + 1) % 3))),
+                              toTangentPlane(g, at(T.F(f, (k + 2) % 3)))});
+    }
+    return bad;
+  };
+  auto upright = [&](int x, int y, int z) {
+    const Vec3 n = geo[x].normal + geo[y].normal + geo[z].normal;
+    const Vec3 e = at(y) - at(x), f = at(z) - at(x);
+    const double area2 = e.cross(f).dot(n) / n.norm();
+    const double longest = std::max({e.squaredNorm(), f.squaredNorm(), (at(z) - at(y)).squaredNorm()});
+    return area2 > kFlipHeight * longest;
+  };
+  auto detach = [&](int f) {
+    for (int k = 0; k < 3; ++k) {
+      std::vector<int>& list = incident[T.F(f, k)];
+      list.erase(std::find(list.begin(), list.end(), f));
+    }
+  };
+  auto attach = [&](int f) {
+    for (int k = 0; k < 3; ++k) incident[T.F(f, k)].push_back(f);
+  };
+  int flipped = 0;
+  for (int sweep = 0; sweep < 4; ++sweep) {
+    std::vector<int> bad;
+    for (int v = 0; v < nv; ++v)
+      if (failing(v) > 0) bad.push_back(v);
+    int flips = 0;
+    for (int v : bad) {
+      if (failing(v) == 0) continue;  // a flip at a neighbour made it valid
+      bool again = true;
+      while (again) {
+        again = false;
+        const std::vector<int> fan = incident[v];
+        for (int f1 : fan) {
+          for (int k = 0; k < 3 && !again; ++k) {
+            const int x = T.F(f1, k), y = T.F(f1, (k + 1) % 3), p = T.F(f1, (k + 2) % 3);
+            const int f2 = triangleWith(y, x);
+            if (f2 < 0) continue;
+            int j = 0;
+            while (T.F(f2, j) != y) ++j;
+            const int q = T.F(f2, (j + 2) % 3);
+            if (q == p || triangleWith(p, q) >= 0 || triangleWith(q, p) >= 0) continue;
+            if (incident[x].size() <= 4 || incident[y].size() <= 4 || incident[p].size() >= 8 || incident[q].size() >= 8)
+              continue;
+            if (!upright(x, q, p) || !upright(q, y, p)) continue;
+            const int corners[4] = {x, y, p, q};
+            int starsBefore = 0, trianglesBefore = 0;
+            for (int c : corners) {
+              const int n = failing(c);
+              starsBefore += n > 0, trianglesBefore += n;
+            }
+            if (starsBefore == 0) continue;
+            const Eigen::Vector3i old1 = T.F.row(f1), old2 = T.F.row(f2);
+            detach(f1);
+            detach(f2);
+            T.F.row(f1) = Eigen::RowVector3i(x, q, p);
+            T.F.row(f2) = Eigen::RowVector3i(q, y, p);
+            attach(f1);
+            attach(f2);
+            int starsAfter = 0, trianglesAfter = 0;
+            for (int c : corners) {
+              const int n = failing(c);
+              starsAfter += n > 0, trianglesAfter += n;
+            }
+            if (starsAfter < starsBefore || (starsAfter == starsBefore && trianglesAfter < trianglesBefore)) {
+              ++flips;
+              again = failing(v) > 0;  // v's fan changed: look at it afresh
+              break;
+            }
+            detach(f1);
+            detach(f2);
+            T.F.row(f1) = old1.transpose();
+            T.F.row(f2) = old2.transpose();
+            attach(f1);
+            attach(f2);
+          }
+          if (again) break;
+        }
+      }
+    }
+    flipped += flips;
+    if (flips == 0) break;
+  }
+  return flipped;
+}
+
 }  // namespace
 
 RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps) {
   if (triangulation.mesh.F.rows() == 0 || maxSweeps <= 0) return {};
-  Repair repair(triangulation, surface);
-  const RepairResult r = repair.run(maxSweeps);
+  RepairResult r;
+  {
+    Repair repair(triangulation, surface);
+    r = repair.run(maxSweeps);
+  }
+  // Stars the moves could not make valid: flip edges around them, then move again.
+  int flips = 0;
+  if (r.invalidAfter > 0) {
+    flips = flipAtInvalidStars(triangulation, surface);
+    if (flips > 0) {
+      Repair again(triangulation, surface);
+      const RepairResult s = again.run(maxSweeps);
+      r.invalidAfter = s.invalidAfter;
+      r.moved += s.moved;
+      r.sweeps += s.sweeps;
+    }
+  }
+  r.flips = flips;
   if (r.invalidBefore > 0)
     triangulation.notes.push_back("repaired " + std::to_string(r.invalidBefore - r.invalidAfter) + " of " +
                                   std::to_string(r.invalidBefore) + " invalid stars by moving " +
                                   std::to_string(r.moved) + " vertices within the surface (" +
-                                  std::to_string(r.sweeps) + " sweeps)");
+                                  std::to_string(r.sweeps) + " sweeps)" +
+                                  (flips > 0 ? " and flipping " + std::to_string(flips) + " edges" : ""));
   return r;
 }
 

@@ -190,6 +190,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"surfaceDistance", {{"max", r.metrics.surfaceDistanceMax}, {"mean", r.metrics.surfaceDistanceMean}}},
           {"displacementMax", r.solve.displacementMax},
           {"dualFallbacks", r.dual.fallbackCount},
+          {"dualUntangled", r.dual.untangled},
           {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
                       {"boundaryPanelsSplit", r.boundaryPanelsSplit}, {"interiorFacesSplit", r.interiorFacesSplit},
                       {"log", log}}},

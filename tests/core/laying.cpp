@@ -175,15 +175,14 @@ TEST_CASE("laying: a cylinder is tiled along its rulings and closes around (§5.
 
 TEST_CASE("laying: sphere patterns radial, diverging and spiral (Fig. 20)") {
   const ParametricSurfacePtr s = makeSurface("sphere");
-  // Known shortfall: diverging keeps 1 invalid star of 712 and 2 self-intersecting dual faces where its
-  // rows reach the band's rims at a slant and the fronts meet (35 invalid stars before the star repair).
-  for (const auto& [field, allowed] : {std::pair<const char*, double>{"radial", 0.0}, {"diverging", 0.004},
-                                       {"spiral", 0.0}}) {
+  // Diverging rows reach the band's rims at a slant and the fronts meet: 35 invalid stars as laid; the
+  // repair's moves leave 1 (with 2 self-intersecting dual faces), and an edge flip there none.
+  for (const char* field : {"radial", "diverging", "spiral"}) {
     INFO(field);
     LayingOptions o = options(0.1, LayingMethod::Prespecified, field);
     o.base = BaseFamily::First;  // base curves along the pattern's lines; layers go around and close
     const Triangulation t = layTriangulation(*s, o);
-    checkFigure(quality(t, *s, 0.1), 0.4, 3.0, allowed, allowed);
+    checkFigure(quality(t, *s, 0.1), 0.4, 3.0);
     CHECK(t.fieldLines.size() > 2);
   }
 }
@@ -367,7 +366,7 @@ TEST_CASE("laying: an uploaded mesh (a sampled torus) is laid like the analytic 
   const Triangulation t = layTriangulation(mesh, o);
   CHECK(t.uv.empty());
   const Quality q = quality(t, mesh, 0.1);
-  // Known shortfall of Method 1 on the mesh (estimated curvature): 33 invalid stars of 2837 after the star
+  // Known shortfall of Method 1 on the mesh (estimated curvature): 34 invalid stars of 2837 after the star
   // repair, short and long edges near the parabolic circles; none on the analytic torus.
   REPORT(q);
   CHECK(q.check.regularFraction >= 0.95);
@@ -440,7 +439,7 @@ TEST_CASE("laying: on a surface with parabolic curves the rows follow the family
 TEST_CASE("laying: across a parabolic curve the rows follow its zero-curvature direction, and the faces turn into bricks (§5.3)") {
   // On the wave roof the zero-curvature direction at the parabolic curve runs along x, across the curve; a
   // planar face there is a brick with its long sides along x, and bricks stack in courses along the rows.
-  // Rows laid along the curve instead (the y direction) leave faces that fold or stay unplanar there.
+  // Rows laid along the curve instead (the y direction) leave faces there that stay unplanar.
   const ParametricSurfacePtr s = makeSurface("wave-roof");
   CHECK(parabolicBaseFamily(*s, options(0.1, LayingMethod::Prespecified)) == BaseFamily::First);
   PipelineParams p;
@@ -460,7 +459,10 @@ TEST_CASE("laying: across a parabolic curve the rows follow its zero-curvature d
   CHECK(interiorFolds == 0);
   CHECK(across.metrics.selfIntersectingCount <= 0.001 * across.metrics.faceCount);
   CHECK(across.interiorHexagonFraction >= 0.99);
-  CHECK((!along.solve.converged && along.metrics.selfIntersectingCount >= 10));
+  // Along the curve the solve stalls far from the tolerance (before the Dupin dual was untangled where faces
+  // cross themselves, at least 10 faces folded there too).
+  CHECK(!along.solve.converged);
+  CHECK(along.metrics.planarityMax > 1e-6);
 }
 
 TEST_CASE("laying: rows are not resampled on a parabolic curve") {

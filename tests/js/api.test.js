@@ -294,8 +294,12 @@ test('the bumps are laid in several systems of rows and say so', async () => {
   assert.ok(r.triangulation.systems > 1, String(r.triangulation.systems));
   assert.ok(r.triangulation.check.coverage > 0.85, String(r.triangulation.check.coverage));
   assert.ok(r.triangulation.notes.some((n) => /more systems of rows/.test(n)));
+  // Dual faces that crossed themselves across the parabolic rings are untangled: none is left folded.
+  assert.ok(r.dualUntangled > 0, String(r.dualUntangled));
+  assert.equal(r.metrics.selfIntersectingCount, 0);
   const roof = await phex.run({ surface: 'wave-roof', faces: 1000 });
   assert.equal(roof.triangulation.systems, 1);
+  assert.equal(typeof roof.dualUntangled, 'number');
 });
 
 test('start and direction set where and which way the base curve runs; bad ones are named', async () => {

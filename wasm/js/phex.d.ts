@@ -196,6 +196,9 @@ export interface Result {
   timings: Timings;
   /** Number of dual vertices placed at their triangle's centroid because the duality was ill-posed there (near parabolic points). */
   dualFallbacks: number;
+  /** Dual points placed by the tangent planes or at the centroid instead of the Dupin centre, where interior
+   * faces crossed themselves across a parabolic curve. */
+  dualUntangled: number;
   /** The triangulation method used ('auto' resolved). */
   method: Exclude<Method, 'auto'>;
   /** The direction field the conjugate methods laid along ('auto' resolved); '' for lattice and subdivision. */

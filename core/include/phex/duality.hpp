@@ -17,6 +17,7 @@ struct DualMesh {
   std::vector<std::uint8_t> boundaryFace;  // #faces: 1 for faces around boundary vertices
   std::vector<int> vertexTriangle;  // #V: the triangle each vertex is dual to, -1 for boundary-edge and corner points
   int fallbackCount = 0;         // dual vertices placed at the centroid (§6 parabolic fallback)
+  int untangled = 0;             // dual vertices placed otherwise where their faces crossed themselves
 };
 
 enum class Duality { Dupin, Tangent };
@@ -25,7 +26,10 @@ enum class Duality { Dupin, Tangent };
 // homothetic copy of the Dupin indicatrix) through the vertex and the projections of the other two onto
 // its tangent plane; the triangle's dual vertex is the average of the three conic centres. In a parabolic
 // region (Gaussian curvatures of differing signs, or |K| h^2 below 1e-8) the centroid is used (§6 step 1).
-DualMesh dupinDual(const Triangulation& triangulation, const Surface& surface);
+// With `untangle`, interior faces that cross themselves where their star straddles a parabolic curve get
+// their corners' points placed by the tangent planes or at the centroid instead, where fewer faces then cross
+// (DualMesh::untangled counts them).
+DualMesh dupinDual(const Triangulation& triangulation, const Surface& surface, bool untangle = true);
 
 // Tangent duality (§4.1): the dual vertex of each triangle is the intersection of the tangent planes at
 // its three vertices. Where the planes are nearly parallel (near parabolic points or on tiny triangles)

@@ -77,6 +77,7 @@ struct RepairResult {
   int invalidBefore = 0, invalidAfter = 0;  // invalid stars (as checkTriangulation counts them)
   int moved = 0;                            // vertices moved
   int sweeps = 0;
+  int flips = 0;                            // edges flipped where moves alone left a star invalid
 };
 RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps = 12);
 
