@@ -439,15 +439,21 @@ double polygonCrosses(const Points& V, const std::vector<int>& ids) {
 // faces, a pentagon and two hexagons where a row along the boundary was resampled close to the parabolic
 // curve: the pentagon needle-thin, the edge between the hexagons shrunk to nothing, every further step
 // folding one of them). Those touching a panel are cut too: cutting only the panel left one there folded.
-// Where more are off, only the crossing panels are cut (cutting the others would not help). `resolve` says
-// whether solving again can reach the tolerance: a face off planar was cut and no interior face away from
-// the panels is left off uncut. With `crossingOnly` (after the last solve) only the crossing panels are cut.
+// Where more are off, only the crossing panels are cut (cutting the others would not help) — unless the
+// surface was laid in several systems of rows (`seams`): where systems meet, and where their rows run along
+// a parabolic ring, the faces are not shaped for planarity and every one left off is cut (on the bumps at
+// 2000 faces, 36 of 1963; the solve then reaches the tolerance instead of stalling at 3e-3). `resolve` says whether solving again can reach the
+// tolerance: a face off planar was cut and no interior face away from the panels is left off uncut. With
+// `crossingOnly` (after the last solve) only the crossing panels are cut.
 constexpr int kFewInteriorOff = 8;
+// Of two diagonals, one whose ends are already corners of more than three faces is taken only where it leaves
+// the pieces this much nearer planar (per such end), so that cuts spread rather than pile up at a vertex.
+constexpr double kCrowdedCut = 1.0;
 struct PanelCut {
   int panels = 0, interior = 0;  // boundary panels and interior faces cut
   bool resolve = false;
 };
-PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingOnly) {
+PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingOnly, bool seams) {
   std::vector<char> cut(r.hex.faceCount(), 0), crossing(r.hex.faceCount(), 0), held(r.hex.V.rows(), 0);
   std::vector<int> interiorOff;
   int count = 0;
@@ -472,7 +478,7 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
     away = away || !touches;
   }
   int interior = 0;
-  const bool few = interiorOff.size() <= static_cast<std::size_t>(kFewInteriorOff);
+  const bool few = seams || interiorOff.size() <= static_cast<std::size_t>(kFewInteriorOff);
   if (crossingOnly || (away && !few)) {  // only the crossing panels
     count = 0;
     for (int f = 0; f < r.hex.faceCount(); ++f) cut[f] = crossing[f], count += crossing[f];
@@ -480,6 +486,9 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
     for (int f : interiorOff) cut[f] = 1, ++interior;
   }
   if (count + interior == 0) return {};
+  std::vector<int> faces(r.hex.V.rows(), 0);  // faces at each vertex, cuts so far included
+  for (int f = 0; f < r.hex.faceCount(); ++f)
+    for (int k = 0; k < r.hex.faceSize(f); ++k) ++faces[r.hex.face(f)[k]];
   PolyMesh hex;  // the new faces; r.initial (and the dual's copy of it) take the same ones
   hex.V = r.hex.V;
   std::vector<int> faceVertex;
@@ -496,9 +505,12 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
           std::vector<int> a(ids.begin() + i, ids.begin() + j + 1), b(ids.begin() + j, ids.end());
           b.insert(b.end(), ids.begin(), ids.begin() + i + 1);
           const double crossing = polygonCrosses(r.hex.V, a) + polygonCrosses(r.hex.V, b);
-          const double score = crossing + std::max(polygonPlanarity(r.hex.V, a), polygonPlanarity(r.hex.V, b));
+          const double crowded = (faces[ids[i]] > 3) + (faces[ids[j]] > 3);
+          const double score =
+              crossing + (1 + kCrowdedCut * crowded) * std::max(polygonPlanarity(r.hex.V, a), polygonPlanarity(r.hex.V, b));
           if (score < best) best = score, parts = {a, b};
         }
+      ++faces[parts[0].front()], ++faces[parts[0].back()];
     } else {
       parts = {ids};
     }
@@ -559,7 +571,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // cut in two and the solve goes on from there (twice at most); after the last solve, panels it left
   // crossing themselves are cut once more.
   for (int round = 0; round < 3 && params.splitBoundaryPanels; ++round) {
-    const PanelCut cut = splitBoundaryPanels(r, po.tolerance, round == 2);
+    const PanelCut cut = splitBoundaryPanels(r, po.tolerance, round == 2, r.triangulation.systems > 1);
     r.boundaryPanelsSplit += cut.panels;
     r.interiorFacesSplit += cut.interior;
     if (!cut.resolve || round == 2) break;

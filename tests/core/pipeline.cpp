@@ -193,6 +193,30 @@ TEST_CASE("pipeline: the start point and laying direction can be set, and are ch
   CHECK_THROWS_WITH(triangulate(p), Catch::Contains("direction"));
 }
 
+TEST_CASE("pipeline: on a surface laid in several systems, every face only folding would make planar is cut") {
+  // The bumps at 1000 faces: along the seams and where rows run along the parabolic rings, some 30 interior
+  // faces stall off planar (the solve stopped at planarity 1e-3 before); each is cut along its best diagonal,
+  // and the mesh reaches the tolerance with no face crossing itself. Without the cuts it stalls.
+  PipelineParams p;
+  p.surface = "freeform";
+  p.faces = 1000;
+  const PipelineResult r = runPipeline(p);
+  INFO("planarity " << r.metrics.planarityMax << ", " << r.interiorFacesSplit << " interior faces and "
+                    << r.boundaryPanelsSplit << " panels cut, hexagons " << r.interiorHexagonFraction);
+  REQUIRE(r.triangulation.systems > 1);
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+  CHECK(r.interiorFacesSplit > 8);  // more than the few cut on a surface of one system
+  CHECK(r.interiorFacesSplit < 0.05 * r.hex.faceCount());
+  CHECK(r.interiorHexagonFraction > 0.7);
+  CHECK(r.metrics.surfaceDistanceMax < 0.005);
+  p.splitBoundaryPanels = false;
+  const PipelineResult whole = runPipeline(p);
+  CHECK_FALSE(whole.solve.converged);
+  CHECK(whole.metrics.planarityMax > 1e-6);
+}
+
 TEST_CASE("pipeline: a surface with umbilics is laid in several systems, and the note names one") {
   // The free-form bumps: their tops are umbilics inside parabolic rings, where no regular conjugate
   // network exists (§7). The rows from L0 cover about half of it (45 % at 2000 faces); further systems

@@ -65,7 +65,8 @@ struct PipelineParams {
   // crosses itself, is cut in two along its best diagonal and the solve goes on where that can reach the
   // tolerance; PipelineResult::boundaryPanelsSplit counts them. Where a few interior faces (at most 8) are
   // left off planar away from such panels too (only folding would make them planar), those are cut the
-  // same way (PipelineResult::interiorFacesSplit).
+  // same way (PipelineResult::interiorFacesSplit); on a surface laid in several systems of rows (its seams
+  // and rows along parabolic rings leave more such faces: round bumps) every interior face left off is.
   bool splitBoundaryPanels = true;
 };
 
