@@ -226,6 +226,7 @@ val resultToJs(const phex::PipelineResult& r) {
   out.set("timings", timings);
   out.set("dualFallbacks", r.dual.fallbackCount);
   out.set("dualUntangled", r.dual.untangled);
+  out.set("duality", std::string(phex::dualityName(r.duality)));
   out.set("method", std::string(phex::triangulationMethodName(r.method)));
   out.set("field", r.field);
   return out;

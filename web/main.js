@@ -256,7 +256,7 @@ async function curvaturePreview() {
   return preview.data;
 }
 
-function showStats({ metrics, solve, timings, method, field, triangulation }) {
+function showStats({ metrics, solve, timings, method, field, triangulation, duality }) {
   const invalidStars = triangulation?.check?.invalidStars?.length;
   $('triangulation-info').textContent = [method, field, invalidStars === undefined ? null : `${invalidStars} invalid stars`]
     .filter(Boolean)
@@ -276,7 +276,8 @@ function showStats({ metrics, solve, timings, method, field, triangulation }) {
   $('surface-distance').textContent = Number.isFinite(metrics.surfaceDistanceMax) ? `${fmt(metrics.surfaceDistanceMax)} max` : '–';
   $('iterations').textContent = `${solve.iterations}${solve.converged ? '' : ' (not converged)'}${
     solve.boundaryPanelsSplit ? `, ${solve.boundaryPanelsSplit} boundary panel${solve.boundaryPanelsSplit > 1 ? 's' : ''} split` : ''}${
-    solve.interiorFacesSplit ? `, ${solve.interiorFacesSplit} interior face${solve.interiorFacesSplit > 1 ? 's' : ''} split` : ''}`;
+    solve.interiorFacesSplit ? `, ${solve.interiorFacesSplit} interior face${solve.interiorFacesSplit > 1 ? 's' : ''} split` : ''}${
+    duality === 'tangent' && $('duality').value === 'auto' ? ', from the tangent dual' : ''}`;
   $('timings').textContent = Object.entries(timings)
     .filter(([stage]) => stage !== 'total')
     .map(([stage, t]) => `${stage} ${ms(t)}`)

@@ -19,10 +19,17 @@ namespace {
 class StageClock {
  public:
   explicit StageClock(std::vector<StageTiming>& out) : out_(out) {}
+  // A stage done again (a second dual tried) adds to its time.
   void done(const std::string& stage) {
     const auto now = std::chrono::steady_clock::now();
-    out_.push_back({stage, std::chrono::duration<double, std::milli>(now - last_).count()});
+    const double ms = std::chrono::duration<double, std::milli>(now - last_).count();
     last_ = now;
+    for (StageTiming& t : out_)
+      if (t.stage == stage) {
+        t.milliseconds += ms;
+        return;
+      }
+    out_.push_back({stage, ms});
   }
 
  private:
@@ -41,10 +48,11 @@ std::string number(double v) {
 Duality parseDuality(const std::string& name) {
   if (name == "dupin") return Duality::Dupin;
   if (name == "tangent") return Duality::Tangent;
+  if (name == "auto") return Duality::Auto;
   throw Error(ErrorCode::InvalidParameter, "duality must be 'dupin' or 'tangent' (got '" + name + "')");
 }
 
-const char* dualityName(Duality d) { return d == Duality::Dupin ? "dupin" : "tangent"; }
+const char* dualityName(Duality d) { return d == Duality::Dupin ? "dupin" : d == Duality::Tangent ? "tangent" : "auto"; }
 
 TriangulationMethod parseTriangulationMethod(const std::string& name) {
   if (name == "auto") return TriangulationMethod::Auto;
@@ -550,13 +558,6 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   const Surface& surface = *r.surface;
   clock.done("triangulate");
 
-  report("dualize", 0, std::string(dualityName(params.duality)) + " duality");
-  r.dual = params.duality == Duality::Dupin ? dupinDual(r.triangulation, surface) : tangentDual(r.triangulation, surface);
-  r.initial = r.dual.mesh;
-  clock.done("dualize");
-
-  report("planarize", 0, "planarity optimization");
-  r.hex = r.initial;
   PlanarizeOptions po;
   po.method = params.solver;
   po.lambda = params.lambda;
@@ -566,27 +567,66 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   po.preventFolds = params.preventFolds;
   po.fitSurface = params.fitSurface;
   po.surface = &surface;
-  r.solve = planarize(r.hex, po, progress, cancel);
-  // Boundary panels that stay off planar or cross themselves (and a few interior faces left off planar) are
-  // cut in two and the solve goes on from there (twice at most); after the last solve, panels it left
-  // crossing themselves are cut once more.
-  for (int round = 0; round < 3 && params.splitBoundaryPanels; ++round) {
-    const PanelCut cut = splitBoundaryPanels(r, po.tolerance, round == 2, r.triangulation.systems > 1);
-    r.boundaryPanelsSplit += cut.panels;
-    r.interiorFacesSplit += cut.interior;
-    if (!cut.resolve || round == 2) break;
-    // Again from lambda = 1, now anchored at the positions reached (starting at the small lambda the first
-    // solve ended with took as long on the uploaded wave roof at 10k faces, 12 iterations against 14).
-    const PlanarizeReport first = r.solve;
-    r.solve = planarize(r.hex, po, progress, cancel);
-    r.solve.iterations += first.iterations;
-    r.solve.rounds += first.rounds;
-    r.solve.initialPlanarityMax = first.initialPlanarityMax;
-    r.solve.log.insert(r.solve.log.begin(), first.log.begin(), first.log.end());
-    const double h = r.hex.meanEdgeLength();
-    if (h > 0) r.solve.displacementMax = (r.hex.V - r.initial.V).rowwise().norm().maxCoeff() / h;
+  const bool seams = r.triangulation.systems > 1;
+  // The dual of `duality` into x.dual / x.initial, and the solve from it into x.hex / x.solve.
+  auto solveFrom = [&](PipelineResult& x, Duality duality) {
+    report("dualize", 0, std::string(dualityName(duality)) + " duality");
+    x.duality = duality;
+    x.dual = duality == Duality::Dupin ? dupinDual(r.triangulation, surface) : tangentDual(r.triangulation, surface);
+    x.initial = x.dual.mesh;
+    clock.done("dualize");
+    report("planarize", 0, "planarity optimization");
+    x.hex = x.initial;
+    x.solve = planarize(x.hex, po, progress, cancel);
+    // Boundary panels that stay off planar or cross themselves (and a few interior faces left off planar) are
+    // cut in two and the solve goes on from there (twice at most); after the last solve, panels it left
+    // crossing themselves are cut once more.
+    for (int round = 0; round < 3 && params.splitBoundaryPanels; ++round) {
+      const PanelCut cut = splitBoundaryPanels(x, po.tolerance, round == 2, seams);
+      x.boundaryPanelsSplit += cut.panels;
+      x.interiorFacesSplit += cut.interior;
+      if (!cut.resolve || round == 2) break;
+      // Again from lambda = 1, now anchored at the positions reached (starting at the small lambda the first
+      // solve ended with took as long on the uploaded wave roof at 10k faces, 12 iterations against 14).
+      const PlanarizeReport first = x.solve;
+      x.solve = planarize(x.hex, po, progress, cancel);
+      x.solve.iterations += first.iterations;
+      x.solve.rounds += first.rounds;
+      x.solve.initialPlanarityMax = first.initialPlanarityMax;
+      x.solve.log.insert(x.solve.log.begin(), first.log.begin(), first.log.end());
+      const double h = x.hex.meanEdgeLength();
+      if (h > 0) x.solve.displacementMax = (x.hex.V - x.initial.V).rowwise().norm().maxCoeff() / h;
+    }
+    clock.done("planarize");
+  };
+  auto crossing = [](const PolyMesh& m) {
+    int n = 0;
+    for (int f = 0; f < m.faceCount(); ++f) n += faceSelfIntersects(m, f);
+    return n;
+  };
+  solveFrom(r, params.duality == Duality::Auto ? Duality::Dupin : params.duality);
+  // Where the solve from the Dupin dual stalls short of the tolerance or leaves faces crossing themselves,
+  // the tangent dual (§4.1) is tried as well: its faces lie in the tangent planes at their vertices, so on
+  // a triangulation along a conjugate network it is planar as it stands (the cyclide's lattice at 3000 to
+  // 13000 faces, where the solve from the Dupin dual stalls at 2e-8 to 2e-7). The one with fewer faces
+  // crossing themselves, then the lower planarity, is kept; `duality` says which. (Duality::Auto only.)
+  if (params.duality == Duality::Auto) {
+    const int crossed = crossing(r.hex);
+    if (!r.solve.converged || crossed > 0) {
+      PipelineResult t;
+      solveFrom(t, Duality::Tangent);
+      const int tangentCrossed = crossing(t.hex);
+      if (tangentCrossed < crossed || (tangentCrossed == crossed && t.solve.planarityMax < r.solve.planarityMax)) {
+        r.duality = Duality::Tangent;
+        r.dual = std::move(t.dual);
+        r.initial = std::move(t.initial);
+        r.hex = std::move(t.hex);
+        r.solve = std::move(t.solve);
+        r.boundaryPanelsSplit = t.boundaryPanelsSplit;
+        r.interiorFacesSplit = t.interiorFacesSplit;
+      }
+    }
   }
-  clock.done("planarize");
 
   report("measure", 0, "measuring");
   r.metrics = measure(r.hex, surface);

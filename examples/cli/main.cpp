@@ -53,7 +53,10 @@ Options of `phex run`:
   --lambda L                initial closeness weight, divided by 10 every round (default 1)
   --mu M                    surface-distance weight (default 0)
   --max-iterations N        Gauss-Newton iteration cap (default 100)
-  --duality dupin|tangent   initial hexagonal mesh: Dupin duality (default, §6) or tangent duality (§4.1)
+  --duality auto|dupin|tangent
+                            initial hexagonal mesh: Dupin duality (§6), tangent duality (§4.1), or
+                            auto (default): Dupin, and tangent as well where that solve stalls or
+                            leaves faces crossing themselves; the better is kept (dualityUsed)
   --solver local|planes|volumes
                             planarity solver: per-face planes by block coordinate descent (default,
                             fastest), per-face planes by Gauss-Newton with Schur elimination (Ceres),
@@ -192,6 +195,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"displacementMax", r.solve.displacementMax},
           {"dualFallbacks", r.dual.fallbackCount},
           {"dualUntangled", r.dual.untangled},
+          {"dualityUsed", phex::dualityName(r.duality)},
           {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
                       {"boundaryPanelsSplit", r.boundaryPanelsSplit}, {"interiorFacesSplit", r.interiorFacesSplit},
                       {"log", log}}},

@@ -306,6 +306,36 @@ TEST_CASE("pipeline: a boundary panel left off planar is cut in two, and the sol
   CHECK(cut.interiorHexagonFraction == Approx(whole.interiorHexagonFraction));
 }
 
+TEST_CASE("pipeline: where the solve from the Dupin dual stalls, the tangent dual is solved from as well") {
+  // The cyclide's lattice runs along its curvature lines, a conjugate network: the tangent dual's faces lie in
+  // their vertices' tangent planes, planar as they stand, while the solve from the Dupin dual stalls at 2e-7
+  // near the parabolic circles. Under auto the tangent dual wins and says so; asked for, Dupin stays.
+  PipelineParams p;
+  p.surface = "cyclide";
+  p.faces = 3000;
+  p.duality = Duality::Dupin;
+  const PipelineResult dupin = runPipeline(p);
+  INFO("dupin: planarity " << dupin.metrics.planarityMax);
+  REQUIRE_FALSE(dupin.solve.converged);
+  CHECK(dupin.duality == Duality::Dupin);
+  p.duality = Duality::Auto;
+  const PipelineResult r = runPipeline(p);
+  INFO("auto: " << dualityName(r.duality) << ", planarity " << r.metrics.planarityMax);
+  CHECK(r.duality == Duality::Tangent);
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+  CHECK(r.metrics.surfaceDistanceMax < 0.002);
+  CHECK(r.hex.faceCount() == dupin.hex.faceCount());
+  // Where the solve from the Dupin dual reaches the tolerance, auto is Dupin.
+  p.faces = 2000;
+  const PipelineResult small = runPipeline(p);
+  CHECK(small.solve.converged);
+  CHECK(small.duality == Duality::Dupin);
+  CHECK(std::string(dualityName(Duality::Auto)) == "auto");
+  CHECK(parseDuality("auto") == Duality::Auto);
+}
+
 TEST_CASE("pipeline: a few interior faces left off planar away from the boundary are cut in two as well") {
   // A Dupin cyclide sampled as 56k triangles (open along its parameter seams), uploaded and tiled at 2500
   // faces: the solve stops short with two interior faces off planar, away from every boundary panel, where
@@ -315,6 +345,7 @@ TEST_CASE("pipeline: a few interior faces left off planar away from the boundary
   PipelineParams p;
   p.mesh = sampledUpload("cyclide", 30000);
   p.faces = 2500;
+  p.duality = Duality::Dupin;  // the cut alone (under auto the tangent dual converges whole here)
   p.splitBoundaryPanels = false;
   const PipelineResult whole = runPipeline(p);
   INFO("whole: planarity " << whole.metrics.planarityMax);

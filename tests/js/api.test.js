@@ -247,6 +247,17 @@ test("method 'auto' picks the field too and says which it used", async () => {
   assert.equal(torus.field, ''); // the torus is laid as a lattice
 });
 
+test("duality: 'auto' solves from the tangent dual as well where the Dupin one stalls, and says which won", async () => {
+  const auto = await phex.run({ surface: 'cyclide', faces: 3000 });
+  assert.equal(auto.duality, 'tangent');
+  assert.ok(auto.solve.converged);
+  const dupin = await phex.run({ surface: 'cyclide', faces: 3000, duality: 'dupin' });
+  assert.equal(dupin.duality, 'dupin');
+  assert.ok(!dupin.solve.converged);
+  const torus = await phex.run({ surface: 'torus', faces: 800 });
+  assert.equal(torus.duality, 'dupin');
+});
+
 test("folds: 'prevent' keeps faces simple, 'allow' reaches planarity by folding, anything else is named", async () => {
   const guarded = await phex.run({ surface: 'freeform', faces: 2000 });
   const free = await phex.run({ surface: 'freeform', faces: 2000, folds: 'allow' });

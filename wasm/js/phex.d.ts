@@ -199,6 +199,9 @@ export interface Result {
   /** Dual points placed by the tangent planes or at the centroid instead of the Dupin centre, where interior
    * faces crossed themselves across a parabolic curve. */
   dualUntangled: number;
+  /** The duality the initial mesh came from: the one asked for; under 'auto', 'tangent' where the solve from the
+   * Dupin dual stalled or left faces crossing themselves and the tangent dual did better. */
+  duality: 'dupin' | 'tangent';
   /** The triangulation method used ('auto' resolved). */
   method: Exclude<Method, 'auto'>;
   /** The direction field the conjugate methods laid along ('auto' resolved); '' for lattice and subdivision. */
@@ -246,9 +249,11 @@ export interface RunParams {
   maxIterations?: number;
   /**
    * Initial dual mesh of the optimization: 'dupin' averages the centres of the Dupin conics of each
-   * triangle; 'tangent' intersects the tangent planes at its three vertices. Default 'dupin'.
+   * triangle; 'tangent' intersects the tangent planes at its three vertices; 'auto' (default) starts from
+   * 'dupin' and tries 'tangent' as well where that solve stalls or leaves faces crossing themselves, keeping
+   * the better (result.duality says which).
    */
-  duality?: 'dupin' | 'tangent';
+  duality?: 'auto' | 'dupin' | 'tangent';
   /**
    * Planarity solver. 'local' (default): per-face planes and vertices updated in turn, one small solve
    * per vertex, the fastest. 'planes': the same energy by Gauss-Newton with Schur elimination (Ceres).

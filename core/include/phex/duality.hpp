@@ -20,7 +20,9 @@ struct DualMesh {
   int untangled = 0;             // dual vertices placed otherwise where their faces crossed themselves
 };
 
-enum class Duality { Dupin, Tangent };
+// Auto (the pipeline's default): the Dupin dual, and the tangent dual as well where the solve from the Dupin
+// dual stalls or leaves faces crossing themselves; the better result is kept.
+enum class Duality { Dupin, Tangent, Auto };
 
 // Dupin duality as the §6 initializer: for each triangle and each of its vertices, the Dupin conic (a
 // homothetic copy of the Dupin indicatrix) through the vertex and the projections of the other two onto

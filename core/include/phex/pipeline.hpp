@@ -57,7 +57,9 @@ struct PipelineParams {
   double lambda = 1.0;             // initial closeness weight, in [0, 1e6]
   double mu = 0.0;                 // surface-distance weight, in [0, 1e6]
   int maxIterations = 100;         // Gauss-Newton iteration cap, 1 .. 10000
-  Duality duality = Duality::Dupin;  // initializer of the optimization: Dupin (§6) or tangent (§4.1)
+  // Initializer of the optimization: Dupin (§6), tangent (§4.1), or auto: Dupin, and tangent as well where
+  // the solve from Dupin stalls or leaves faces crossing themselves (PipelineResult::duality says which won).
+  Duality duality = Duality::Auto;
   PlanarizeMethod solver = PlanarizeMethod::LocalGlobal;  // planarity solver (see planarize.hpp)
   bool preventFolds = true;        // the local solver keeps simple faces simple (PlanarizeOptions::preventFolds)
   bool fitSurface = true;          // once planar, shift the face planes towards the surface (PlanarizeOptions::fitSurface)
@@ -70,7 +72,7 @@ struct PipelineParams {
   bool splitBoundaryPanels = true;
 };
 
-// "dupin" / "tangent" <-> Duality; parseDuality throws Error(InvalidParameter) for other names.
+// "dupin" / "tangent" / "auto" <-> Duality; parseDuality throws Error(InvalidParameter) for other names.
 Duality parseDuality(const std::string& name);
 const char* dualityName(Duality d);
 
@@ -88,6 +90,9 @@ struct PipelineResult {
   PolyMesh initial;            // the dual mesh before optimization (H0)
   PolyMesh hex;                // the P-Hex mesh
   DualMesh dual;               // bookkeeping of the dual (which vertex / triangle each element comes from)
+  // The duality `initial` comes from (never Auto): under Duality::Auto the tangent one where the solve from
+  // the Dupin dual stalled or left faces crossing themselves and the tangent dual did better.
+  Duality duality = Duality::Dupin;
   MeshMetrics metrics;         // of `hex`
   double interiorHexagonFraction = 0.0;  // hexagons among the faces not on the boundary (dual.boundaryFace)
   PlanarizeReport solve;
