@@ -62,7 +62,7 @@ function native(c) {
 function nativeOnce(c) {
   const report = join(scratch, 'r.json');
   const input = isMesh(c) ? ['--mesh', meshFiles[c.surface]] : ['--surface', c.surface];
-  const args = ['run', ...input, '--faces', String(c.faces), '--solver', c.solver, '--report', report, '--quiet'];
+  const args = ['run', ...input, '--faces', String(c.faces), '--solver', c.solver, '--duality', dualityOf(c), '--report', report, '--quiet'];
   const started = performance.now();
   const p = spawnSync(cli, args, { encoding: 'utf8' });
   const wall = performance.now() - started;
@@ -71,12 +71,19 @@ function nativeOnce(c) {
   return {
     faces: r.mesh.faces, milliseconds: { ...r.milliseconds, wall }, iterations: r.solver.iterations,
     planarityMax: r.planarity.max, invalidFaces: r.invalidFaces, surfaceDistanceMax: r.surfaceDistance.max,
-    peakMemoryMB: r.peakMemoryMB,
+    peakMemoryMB: r.peakMemoryMB, duality: r.dualityUsed,
   };
 }
 
+// The default local solver runs as users get it (duality auto: from the tangent dual as well where the solve
+// from the Dupin dual stalls); the Ceres solvers, the reference methods, from the Dupin dual alone (§6), so
+// that a stalled Ceres solve is not run twice.
+function dualityOf(c) {
+  return c.solver === 'local' ? 'auto' : 'dupin';
+}
+
 function wasm(c) {
-  const base = isMesh(c) ? { meshFile: meshFiles[c.surface], faces: c.faces, solver: c.solver } : c;
+  const base = { ...(isMesh(c) ? { meshFile: meshFiles[c.surface], faces: c.faces, solver: c.solver } : c), duality: dualityOf(c) };
   const params = { ...base, repeat: repeatOf(c), ...(c.faces > 10000 ? { warmupFaces: 10000 } : {}) };
   const p = spawnSync('node', ['--no-experimental-fetch', join(repo, 'bench/wasm-case.mjs'), JSON.stringify(params)],
     { encoding: 'utf8', maxBuffer: 1 << 26 });
@@ -96,7 +103,7 @@ for (const c of cases) {
     if (r.error) { console.log(`| ${c.surface} | ${c.faces} | ${c.solver} | ${where} | error: ${r.error} |`); continue; }
     const ms = r.milliseconds;
     const ratio = where === 'wasm' && !n.error ? fmt(ms.total / n.milliseconds.total, 2) : '';
-    console.log(`| ${c.surface} | ${r.faces} | ${c.solver} | ${where} | ${fmt(ms.triangulate)} | ${fmt(ms.dualize)} | ${fmt(ms.planarize)} | ${fmt(ms.measure)} | ${fmt(ms.total)} | ${r.iterations} | ${sci(r.planarityMax)} | ${r.invalidFaces} | ${sci(r.surfaceDistanceMax)} | ${fmt(r.peakMemoryMB)} | ${ratio} | ${where === 'wasm' ? fmt(r.firstTotal) : ''} |`);
+    console.log(`| ${c.surface} | ${r.faces} | ${c.solver} | ${where} | ${fmt(ms.triangulate)} | ${fmt(ms.dualize)} | ${fmt(ms.planarize)} | ${fmt(ms.measure)} | ${fmt(ms.total)} | ${r.iterations}${r.duality === 'tangent' ? ' (tangent)' : ''} | ${sci(r.planarityMax)} | ${r.invalidFaces} | ${sci(r.surfaceDistanceMax)} | ${fmt(r.peakMemoryMB)} | ${ratio} | ${where === 'wasm' ? fmt(r.firstTotal) : ''} |`);
   }
 }
 mkdirSync(outDir, { recursive: true });

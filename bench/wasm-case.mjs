@@ -36,6 +36,7 @@ console.log(JSON.stringify({
   totals: runs.map((x) => x.r.timings.total),
   firstTotal: first.timings.total,
   iterations: r.solve.iterations,
+  duality: r.duality,
   planarityMax: r.metrics.planarityMax,
   invalidFaces: r.metrics.selfIntersectingCount,
   surfaceDistanceMax: r.metrics.surfaceDistanceMax,

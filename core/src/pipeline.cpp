@@ -454,6 +454,9 @@ double polygonCrosses(const Points& V, const std::vector<int>& ids) {
 // tolerance: a face off planar was cut and no interior face away from the panels is left off uncut. With
 // `crossingOnly` (after the last solve) only the crossing panels are cut.
 constexpr int kFewInteriorOff = 8;
+// Rounds of cuts and solves: two, and on a surface of several systems four (each solve can stall at faces
+// the previous one left shaped for folding: the bumps at 8000 faces stopped at 1e-7 after two).
+constexpr int kSeamRounds = 4;
 // Of two diagonals, one whose ends are already corners of more than three faces is taken only where it leaves
 // the pieces this much nearer planar (per such end), so that cuts spread rather than pile up at a vertex.
 constexpr double kCrowdedCut = 1.0;
@@ -579,13 +582,14 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     x.hex = x.initial;
     x.solve = planarize(x.hex, po, progress, cancel);
     // Boundary panels that stay off planar or cross themselves (and a few interior faces left off planar) are
-    // cut in two and the solve goes on from there (twice at most); after the last solve, panels it left
-    // crossing themselves are cut once more.
-    for (int round = 0; round < 3 && params.splitBoundaryPanels; ++round) {
-      const PanelCut cut = splitBoundaryPanels(x, po.tolerance, round == 2, seams);
+    // cut in two and the solve goes on from there (twice at most, four times on a surface of several
+    // systems); after the last solve, panels it left crossing themselves are cut once more.
+    const int last = seams ? kSeamRounds : 2;
+    for (int round = 0; round <= last && params.splitBoundaryPanels; ++round) {
+      const PanelCut cut = splitBoundaryPanels(x, po.tolerance, round == last, seams);
       x.boundaryPanelsSplit += cut.panels;
       x.interiorFacesSplit += cut.interior;
-      if (!cut.resolve || round == 2) break;
+      if (!cut.resolve || round == last) break;
       // Again from lambda = 1, now anchored at the positions reached (starting at the small lambda the first
       // solve ended with took as long on the uploaded wave roof at 10k faces, 12 iterations against 14).
       const PlanarizeReport first = x.solve;
