@@ -65,6 +65,23 @@ constexpr double kFillSine = 0.5;  // 30 degrees
 constexpr double kFillClearance = 0.7;
 constexpr double kFillSineBlunt = 0.3;  // 17.5 degrees
 constexpr double kFillEdgeWide = 2.0;
+// Method 2's rows ending at an open boundary (their flow line leaves the surface before the next sample) end on
+// it (extendRow): where the gap left is at least kBoundaryMin of their spacing and kBoundaryMinCells cells, a
+// vertex goes onto the boundary; where it is less than kBoundaryMin of their spacing, their end vertex is moved
+// onto it if their last segment is then at most kBoundaryMaxCells cells. Rows sampled every cell from anywhere
+// stopped up to a spacing short of the boundary (a sawtooth strip uncovered: the hyperboloid at 2000 faces
+// covered 90 %, now 100 %). Gaps outside these bounds (rows crowded or spread out, e.g. near the wave roof's
+// corners) leave the row end where it is: a vertex there would make an edge far shorter or longer than a cell.
+constexpr double kBoundaryMin = 0.5;
+constexpr double kBoundaryMinCells = 0.5;
+constexpr double kBoundaryMaxCells = 1.5;
+// ... only where the row's line crosses the boundary within about 37 degrees of its normal (the cosine): rows
+// running into it slantwise (the helicoid's) got skewed ends, invalid stars and folded Dupin hexagons there.
+constexpr double kBoundaryCrossing = 0.8;
+// Two row ends on the boundary are joined by an edge along it only where its midpoint lies on the surface, off
+// the boundary by at most this many cells (chordOnSurface): the tangent dual puts a P-Hex vertex at about the
+// midpoint, which on an uploaded mesh's jagged boundary polyline could fall several mesh edges off the mesh.
+constexpr double kChordOffBoundary = 0.01;
 constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
 constexpr double kEllFirst = 1.5;     // ... at first only this many: further where no crossing is found
 constexpr int kParabolicSamples = 400;  // samples of the surface that vote for the base family at parabolic curves
@@ -113,6 +130,10 @@ struct Row {
   std::vector<double> curveArc;  // cumulative from curve[0]
   double curveLength = 0;        // with the closing segment on a closed curve
   std::vector<double> sampleArc; // #ids, increasing
+  // On an open row, the vertices of the row it was laid from beyond its first and last apexes (the bases' ends
+  // of their segments), or -1: a vertex added before the first or after the last closes the row's end with
+  // them (Laying::layLayer).
+  int belowStart = -1, belowEnd = -1;
 };
 
 struct Front {
@@ -269,6 +290,9 @@ class Laying {
   std::optional<double> facingGap(const Front& a, const Front& b, bool& staggered) const;
   void layLayer(std::size_t f, double stepScale);
   bool extendRow(Row& row, bool atStart);
+  void closeRowEnd(const Row& row, bool atStart);
+  void snapRowEnd(Row& row, bool atStart, const SurfacePoint& onto, double arc);
+  bool chordOnSurface(const SurfacePoint& a, const SurfacePoint& b) const;
   Segment segment(const Row& row, int i) const;
   std::vector<std::optional<Apex>> progressiveApexes(const Row& row, const std::vector<Segment>& segments) const;
   std::vector<std::optional<Apex>> prespecifiedApexes(const Row& row, const std::vector<Segment>& segments, Row& next,
@@ -312,6 +336,8 @@ class Laying {
   int filledApexes_ = 0;
   int resampled_ = 0, boundaryStops_ = 0, collisions_ = 0, invalidDrops_ = 0, splits_ = 0, layers_ = 0;
   int asymptoticStops_ = 0, gapTriangles_ = 0;
+  int boundaryEnds_ = 0, snappedEnds_ = 0;
+  std::vector<char> onBoundary_;     // row ends laid on (or moved onto) the boundary
   std::string firstResample_, firstInvalidDrop_, firstReuse_, firstAsymptoticStop_;
   std::vector<std::string> zipNotes_;
 };
@@ -334,6 +360,7 @@ int Laying::addVertex(const SurfacePoint& p, double ratio, double height) {
   vertexRatio_.push_back(ratio);
   vertexHeight_.push_back(height);
   inBase_.push_back(0);
+  onBoundary_.push_back(0);
   grid_.insert(id, p.point());
   return id;
 }
@@ -642,6 +669,15 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
   };
   std::vector<std::optional<Apex>> apexes(n);
   int middle = -1;
+  // A segment ending on the boundary (a row extended onto it) may be much shorter than the others, and so
+  // is its step; its l_i is traced as far as the row's mean step allows, so that it reaches the next row, and
+  // its step is left out of the fit of the next row (which would otherwise shift with every such end).
+  std::vector<char> toBoundary(n, 0);
+  double meanStep = 0;
+  int stepCount = 0;
+  for (const Segment& s : segments)
+    if (!s.degenerate && !s.asymptotic) meanStep += s.step, ++stepCount;
+  meanStep = stepCount > 0 ? meanStep / stepCount : 0.0;
   for (int i = 0; i < n; ++i) {
     const Segment& s = segments[i];
     if (s.degenerate) continue;
@@ -657,7 +693,8 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
     }
     if (s.asymptotic) cannotTile(s.M, kAsymptoticBase);
     if (!d) continue;  // a singularity of D_G: no apex here
-    ells[i].emplace(field_, G_, s.M, *d, kEllLength * s.step, false);
+    toBoundary[i] = onBoundary_[row.ids[i]] || onBoundary_[row.ids[(i + 1) % row.ids.size()]];
+    ells[i].emplace(field_, G_, s.M, *d, kEllLength * (toBoundary[i] ? std::max(s.step, meanStep) : s.step), false);
     // Past the step (strictly), so that whether l_i is longer than the step is known.
     if (recordConjugateLines) ells[i]->finish();
     else ells[i]->advance(std::nextafter(kEllFirst * s.step, std::numeric_limits<double>::infinity()));
@@ -715,8 +752,7 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
       crossings[i] = crossing(i, hint);
       if (!crossings[i]) continue;
       const double t = crossings[i]->ellArc;
-      fit += segments[i].step * t;
-      norm += t * t;
+      if (!toBoundary[i]) fit += segments[i].step * t, norm += t * t;
       if (t > 0) raise = std::max(raise, kValidMargin * segments[i].validStep / t);
     }
     if (norm <= 0 || iteration == 5) break;
@@ -742,14 +778,21 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
 
 // Adds a vertex before the first (or after the last) of an open row, so that rows keep reaching the boundary
 // instead of shrinking by one segment per layer: further along the row's curve where it goes on (Method 2's
-// flow line), else by extrapolating the row (Method 1). Returns false when that point is outside or taken.
+// flow line), else by extrapolating the row (Method 1). Where Method 2's flow line ends on the boundary before
+// that point, the vertex goes onto its end if that is at least kBoundaryMin of the spacing and kBoundaryMinCells
+// cells away, and the row's end is moved onto it (snapRowEnd) if it is closer than kBoundaryMin of the spacing
+// and the last segment is then no longer than kBoundaryMaxCells cells, so that rows end on the boundary where
+// that makes no edge much shorter or longer than a cell. (Method 1's rows, whose polylines are their own curves,
+// would bend at such an end and pass the bend on: they stop short as before.) Returns false when no vertex was
+// added: there is no such point, it is taken, or the row end was moved or left.
 bool Laying::extendRow(Row& row, bool atStart) {
   const int n = static_cast<int>(row.ids.size());
   if (row.closed || n < 2) return false;
   const int end = atStart ? 0 : n - 1, inner = atStart ? 1 : n - 2;
   const SurfacePoint& e = vertices_[row.ids[end]];
   const double spacing = std::abs(row.sampleArc[end] - row.sampleArc[inner]);
-  const double t = row.sampleArc[end] + (atStart ? -spacing : spacing);
+  double t = row.sampleArc[end] + (atStart ? -spacing : spacing);
+  bool toBoundary = false;
   SurfacePoint p;
   if (t >= 0 && t <= row.curveLength && o_.method == LayingMethod::Prespecified) {
     p = pointAtArc(walker_, row.curve, row.curveArc, false, row.curveLength, t);
@@ -757,12 +800,40 @@ bool Laying::extendRow(Row& row, bool atStart) {
     const Vec3 x = 2 * e.point() - vertices_[row.ids[inner]].point();
     p = walker_.project(x, e);
     if (walker_.isOutside(x, p)) return false;
+  } else if (row.curveLength > 0) {
+    // Method 2: the row's flow line ends before the next sample; onto its end if that is on the boundary (just
+    // beyond it along the line is outside) and the line crosses the boundary steeply: where it runs into it
+    // slantwise, an end moved along it would skew the triangles at the end and the rows laid from them.
+    const double curveEnd = atStart ? 0.0 : row.curveLength, gap = std::abs(curveEnd - row.sampleArc[end]);
+    if (row.curve.size() < 2) return false;
+    const SurfacePoint& last = atStart ? row.curve.front() : row.curve.back();
+    const SurfacePoint& before = atStart ? row.curve[1] : row.curve[row.curve.size() - 2];
+    const Vec3 along = last.point() - before.point();
+    if (!(along.norm() > 0)) return false;
+    // Beyond the boundary the projection stays on it: the offset from there, in the tangent plane, points
+    // outward across the boundary.
+    const Vec3 probe = last.point() + (0.25 * spacing / along.norm()) * along;
+    const SurfacePoint foot = walker_.project(probe, last);
+    Vec3 outward = probe - foot.point();
+    outward -= outward.dot(foot.g.normal) * foot.g.normal;
+    if (!(outward.norm() > walker_.outsideTolerance()) ||
+        outward.dot(along) < kBoundaryCrossing * outward.norm() * along.norm())
+      return false;
+    if (!(gap >= kBoundaryMin * spacing)) {
+      if (spacing + gap <= kBoundaryMaxCells * o_.cell) snapRowEnd(row, atStart, last, curveEnd);
+      return false;
+    }
+    if (!(gap >= kBoundaryMinCells * o_.cell)) return false;
+    t = curveEnd;
+    p = last;
+    toBoundary = true;
   } else {
     return false;
   }
   if (collides(p.point(), 0.5 * spacing)) return false;
   const int id = addVertex(p, vertexRatio_[row.ids[end]], vertexHeight_[row.ids[end]]);
   inBase_[id] = 1;
+  onBoundary_[id] = toBoundary;
   if (atStart) {
     row.ids.insert(row.ids.begin(), id);
     row.sampleArc.insert(row.sampleArc.begin(), t);
@@ -772,6 +843,61 @@ bool Laying::extendRow(Row& row, bool atStart) {
   }
   if (o_.method == LayingMethod::Progressive) setOwnCurve(row);
   return true;
+}
+
+// A row end closer to the boundary than kBoundaryMin of the spacing is moved onto it (to `onto`, at arc
+// `arc` along the row's curve), so that the row still ends on the boundary without a sliver segment: by less
+// than its segment, not a vertex on the boundary already, not closer than half the segment to a vertex of
+// another row (the collision test of extendRow), and where the end of the row below is on the boundary too
+// (their edge then runs along it), only if that edge stays on the surface (chordOnSurface).
+void Laying::snapRowEnd(Row& row, bool atStart, const SurfacePoint& onto, double arc) {
+  const int n = static_cast<int>(row.ids.size());
+  const int id = row.ids[atStart ? 0 : n - 1], inner = row.ids[atStart ? 1 : n - 2];
+  const double shift = (onto.point() - vertices_[id].point()).norm();
+  const double segment = (vertices_[inner].point() - vertices_[id].point()).norm();
+  if (onBoundary_[id] || !(shift < segment) || collides(onto.point(), 0.5 * segment)) return;
+  const int below = atStart ? row.belowStart : row.belowEnd;
+  if (below >= 0 && onBoundary_[below] && !chordOnSurface(vertices_[below], onto)) return;
+  vertices_[id] = onto;
+  onBoundary_[id] = 1;
+  grid_.insert(id, onto.point());  // (its old cell keeps it too: the collision test reads the new position)
+  row.sampleArc[atStart ? 0 : n - 1] = arc;
+  ++snappedEnds_;
+}
+
+// Whether the midpoint of the chord between two points on the boundary lies on the surface: its offset from
+// its projection, in the tangent plane there, is at most kChordOffBoundary cells. A chord between two points of
+// a boundary that bulges outward between them (a mesh's zigzag boundary polyline) leaves the surface, and with
+// it the P-Hex vertex of the boundary edge (the tangent dual puts it at about the midpoint).
+bool Laying::chordOnSurface(const SurfacePoint& a, const SurfacePoint& b) const {
+  const Vec3 mid = 0.5 * (a.point() + b.point());
+  const SurfacePoint foot = walker_.project(mid, a);
+  Vec3 off = mid - foot.point();
+  off -= off.dot(foot.g.normal) * foot.g.normal;
+  return !(off.norm() > kChordOffBoundary * o_.cell);
+}
+
+// After extendRow added a vertex before the first (or after the last) of `row`: the triangle between it, the
+// row's old end and the vertex of the row below beyond the old end's apex segment (Row::belowStart /
+// belowEnd), which the layer below left open (a notch at every other row end along the boundary): only where
+// both it and that vertex are on the boundary (the triangle's third edge runs along it), not where it would be
+// folded or a sliver or that edge leaves the surface (chordOnSurface), and Method 2 only (like the ends on the
+// boundary, extendRow).
+void Laying::closeRowEnd(const Row& row, bool atStart) {
+  const int n = static_cast<int>(row.ids.size());
+  const int below = atStart ? row.belowStart : row.belowEnd;
+  if (below < 0 || n < 3 || o_.method != LayingMethod::Prespecified) return;
+  const int added = atStart ? row.ids[0] : row.ids[n - 1], old = atStart ? row.ids[1] : row.ids[n - 2];
+  if (!onBoundary_[added] || !onBoundary_[below]) return;
+  // CCW seen from the normal: the row runs forward with the row below to its right.
+  const Eigen::Vector3i tri = atStart ? Eigen::Vector3i(below, old, added) : Eigen::Vector3i(below, added, old);
+  const Vec3 &a = vertices_[tri(0)].point(), &b = vertices_[tri(1)].point(), &c = vertices_[tri(2)].point();
+  const Vec3 normal = (b - a).cross(c - a);
+  const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  if (!(longest > 0) || !(normal.dot(vertices_[old].g.normal) > 0.2 * longest * longest)) return;
+  if (!chordOnSurface(vertices_[below], vertices_[added])) return;
+  triangles_.push_back(tri);
+  ++boundaryEnds_;
 }
 
 // Triangles between two rows running the same way, Q to the left of P: each step advances along P (triangle
@@ -960,8 +1086,8 @@ void Laying::layLayer(std::size_t f, double stepScale) {
   Row A = fronts_[f].row;
   for (int id : A.ids) inBase_[id] = 1;
   for (int k = 0; k < 2; ++k) {
-    extendRow(A, true);
-    extendRow(A, false);
+    if (extendRow(A, true) && k == 0) closeRowEnd(A, true);
+    if (extendRow(A, false) && k == 0) closeRowEnd(A, false);
   }
   const int count = static_cast<int>(A.ids.size());
   const int n = A.closed ? count : count - 1;
@@ -1204,6 +1330,7 @@ void Laying::layLayer(std::size_t f, double stepScale) {
         if (k + 1 < length || closedRun)
           addTriangle(A.ids[(i + 1) % count], C.ids[(k + 1) % length], C.ids[k]);
       }
+      if (!closedRun) C.belowStart = A.ids[first], C.belowEnd = A.ids[(first + length) % count];
     }
     if (o_.method == LayingMethod::Progressive) setOwnCurve(C);
     if (o_.method == LayingMethod::Prespecified && layers_ <= 4 * static_cast<int>(fronts_.size())) {
@@ -1738,6 +1865,9 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
                            " times where their spacing drifted from the cell, first near " + firstResample_);
   note(filledApexes_ > 0, std::to_string(filledApexes_) + " missing apexes filled in between their neighbours");
   note(boundaryStops_ > 0, std::to_string(boundaryStops_) + " fronts stopped at the boundary");
+  note(boundaryEnds_ > 0, std::to_string(boundaryEnds_) + " notches between row ends on the boundary closed");
+  note(snappedEnds_ > 0, std::to_string(snappedEnds_) + " row ends moved onto the boundary, which was less than " +
+                             std::to_string(kBoundaryMin).substr(0, 3) + " of a spacing beyond them");
   note(splits_ > 0, std::to_string(splits_) + " rows split where apexes fell outside or collided");
   note(collisions_ > 0, std::to_string(collisions_) + " apexes dropped where they would overlap laid triangles");
   note(invalidDrops_ > 0, "Method 2: " + std::to_string(invalidDrops_) +
@@ -1887,6 +2017,7 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
   if (options.repairSweeps > 0) {
     checkCancel(cancel);
     repairStars(t, surface, options.repairSweeps);
+    openInvalidBoundaryStars(t, surface);
   }
   if (progress) progress({"triangulate", 1.0, std::to_string(t.mesh.F.rows()) + " triangles laid"});
   return t;

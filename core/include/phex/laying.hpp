@@ -50,7 +50,8 @@ struct LayingOptions {
   BaseFamily base = BaseFamily::Auto;
   // A tangent vector at the start: the base curve follows the family closest to it (overrides `base`).
   std::optional<Vec3> baseDirection;
-  // Sweeps of repairStars over the laid triangulation (0: leave it as laid); what it did goes in the notes.
+  // Sweeps of repairStars over the laid triangulation, after which openInvalidBoundaryStars opens the stars
+  // still invalid next to the boundary (0: leave it as laid); what they did goes in the notes.
   int repairSweeps = 12;
   int maxLayers = 100000;    // layers over all fronts; laying stops there (with a note)
   int maxVertices = 4000000; // more would be needed: Error(InvalidParameter) naming the cell size
@@ -69,7 +70,8 @@ double stepLowerBound(double r, double b);
 // Lays a triangulation of `surface` (mesh triangles CCW seen from the surface normal; uv filled on a
 // ParametricSurface). fieldLines holds the base curves laid (L0 first) and, for Method 2, the conjugate
 // flow lines of the first layer; notes say what happened (lower bound active, steps re-used across
-// parabolic curves, rows resampled, fronts stopped at the boundary or zipped where they met).
+// parabolic curves, rows resampled, row ends moved onto the boundary, fronts stopped at the boundary or zipped
+// where they met). Method 2's rows crossing an open boundary steeply end on it (extendRow in laying.cpp).
 // Throws Error(InvalidParameter) for bad options (naming the option and value), Error(CannotTile) where
 // the chosen field cannot give a valid triangulation (e.g. a base along an asymptotic direction, which is
 // self-conjugate) naming the point and suggesting another field or method, Error(Cancelled) when cancelled.

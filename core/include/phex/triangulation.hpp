@@ -89,4 +89,11 @@ RepairResult repairStars(Triangulation& triangulation, const Surface& surface, i
 // (connectivity stays manifold, no vertex is left unused). Returns how many were dropped; a note says so.
 int trimBoundarySlivers(Triangulation& triangulation, double ratio = 0.35);
 
+// Where the last triangles along an open boundary close the star of a vertex next to it into an invalid one
+// (Props 4, 5; e.g. a row ending half a spacing from the boundary, whose triangles up to it are right-angled
+// there, which K > 0 does not allow), drops one of them (a failing one if it can): the vertex becomes a
+// boundary vertex, as it was before the rows ended on the boundary. One triangle per corner, with an edge on
+// the boundary whose ends both keep another triangle. Returns how many were dropped; a note says so.
+int openInvalidBoundaryStars(Triangulation& triangulation, const Surface& surface);
+
 }  // namespace phex
