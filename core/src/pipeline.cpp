@@ -439,7 +439,7 @@ double polygonCrosses(const Points& V, const std::vector<int>& ids) {
 
 // Boundary panels the solve leaves off planar (a panel closing a boundary fan where the boundary meets a
 // parabolic curve can be left with no planar shape that does not fold) or crossing themselves (a quad whose
-// edge points ended on either side of its triangle point) are cut in two along the diagonal that leaves the
+// edge points ended on either side of its triangle point), and interior faces crossing themselves, are cut in two along the diagonal that leaves the
 // pieces simple and most nearly planar, in `r.hex` and `r.initial` alike; the dual's bookkeeping follows
 // (both pieces belong to the same vertex). Where an interior face away from such panels is off planar too,
 // and at most kFewInteriorOff interior faces are off in all, each of them is cut the same way: the solve
@@ -472,7 +472,9 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
   for (int f = 0; f < r.hex.faceCount(); ++f) {
     const bool offPlanar = facePlanarity(r.hex, f) > tolerance;
     const bool boundaryPanel = r.dual.boundaryFace[f] && r.hex.faceSize(f) >= 4;
-    crossing[f] = boundaryPanel && faceSelfIntersects(r.hex, f);
+    // So is an interior face the dual left crossing itself (untangleDual could not mend it): the solve never
+    // unfolds it, and cut it may become two simple pieces.
+    crossing[f] = r.hex.faceSize(f) >= 4 && faceSelfIntersects(r.hex, f);
     if (!offPlanar && !crossing[f]) continue;
     if (!boundaryPanel) {
       interiorOff.push_back(f);
@@ -490,10 +492,13 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
   }
   int interior = 0;
   const bool few = seams || interiorOff.size() <= static_cast<std::size_t>(kFewInteriorOff);
-  if (crossingOnly || (away && !few)) {  // only the crossing panels
+  if (crossingOnly || (away && !few)) {  // only the crossing panels (and faces)
     count = 0;
-    for (int f = 0; f < r.hex.faceCount(); ++f) cut[f] = crossing[f], count += crossing[f];
-  } else if (away) {
+    for (int f = 0; f < r.hex.faceCount(); ++f) {
+      cut[f] = crossing[f];
+      if (crossing[f]) ++(r.dual.boundaryFace[f] ? count : interior);
+    }
+  } else if (away || (seams && !interiorOff.empty())) {
     for (int f : interiorOff) cut[f] = 1, ++interior;
   }
   if (count + interior == 0) return {};
