@@ -439,10 +439,11 @@ double polygonCrosses(const Points& V, const std::vector<int>& ids) {
 
 // Boundary panels the solve leaves off planar (a panel closing a boundary fan where the boundary meets a
 // parabolic curve can be left with no planar shape that does not fold) or crossing themselves (a quad whose
-// edge points ended on either side of its triangle point), and interior faces crossing themselves, are cut in two along the diagonal that leaves the
-// pieces simple and most nearly planar, in `r.hex` and `r.initial` alike; the dual's bookkeeping follows
+// edge points ended on either side of its triangle point), and interior faces crossing themselves, are cut
+// in two along the diagonal that leaves the pieces simple and most nearly planar, in `r.hex` and `r.initial` alike; the dual's bookkeeping follows
 // (both pieces belong to the same vertex). Where an interior face away from such panels is off planar too,
-// and at most kFewInteriorOff interior faces are off in all, each of them is cut the same way: the solve
+// and only a few interior faces are off in all (kFewInteriorOff, or one in kFewInteriorShare of the faces on
+// a larger mesh), each of them is cut the same way: the solve
 // stopped short there because only folding would make them planar (on the uploaded wave roof at 100k
 // faces, a pentagon and two hexagons where a row along the boundary was resampled close to the parabolic
 // curve: the pentagon needle-thin, the edge between the hexagons shrunk to nothing, every further step
@@ -450,10 +451,13 @@ double polygonCrosses(const Points& V, const std::vector<int>& ids) {
 // Where more are off, only the crossing panels are cut (cutting the others would not help) — unless the
 // surface was laid in several systems of rows (`seams`): where systems meet, and where their rows run along
 // a parabolic ring, the faces are not shaped for planarity and every one left off is cut (on the bumps at
-// 2000 faces, 36 of 1963; the solve then reaches the tolerance instead of stalling at 3e-3). `resolve` says whether solving again can reach the
-// tolerance: a face off planar was cut and no interior face away from the panels is left off uncut. With
-// `crossingOnly` (after the last solve) only the crossing panels are cut.
-constexpr int kFewInteriorOff = 8;
+// 2000 faces, 36 of 1963; the solve then reaches the tolerance instead of stalling at 3e-3). `resolve` says
+// whether solving again can reach the tolerance: a face off planar was cut and no interior face away from
+// the panels is left off uncut. With `crossingOnly` (after the last solve) only the crossing panels are cut.
+constexpr std::size_t kFewInteriorOff = 8;
+// The uploaded wave roof at 100k faces, its rows ending on the boundary, left 13 interior faces off planar
+// at 1.3e-4 (0.013 % of its faces), where it had left 5 with its rows stopping short of the boundary.
+constexpr std::size_t kFewInteriorShare = 5000;
 // Rounds of cuts and solves: two, and on a surface of several systems four (each solve can stall at faces
 // the previous one left shaped for folding: the bumps at 8000 faces stopped at 1e-7 after two).
 constexpr int kSeamRounds = 4;
@@ -491,7 +495,8 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
     away = away || !touches;
   }
   int interior = 0;
-  const bool few = seams || interiorOff.size() <= static_cast<std::size_t>(kFewInteriorOff);
+  const std::size_t fewOff = std::max(kFewInteriorOff, static_cast<std::size_t>(r.hex.faceCount()) / kFewInteriorShare);
+  const bool few = seams || interiorOff.size() <= fewOff;
   if (crossingOnly || (away && !few)) {  // only the crossing panels (and faces)
     count = 0;
     for (int f = 0; f < r.hex.faceCount(); ++f) {

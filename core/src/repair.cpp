@@ -52,8 +52,10 @@ TriangleState triangleState(const LocalGeometry& g, const Vec2& a, const Vec2& b
 // evaluation would sum them, so the sums — and every decision — are exactly those of a full evaluation.
 class Repair {
  public:
-  Repair(Triangulation& t, const Surface& surface)
-      : t_(t), T_(t.mesh), surface_(surface), rings_(vertexRings(t.mesh)), geo_(vertexGeometry(t, surface)) {
+  // `geometry`: of every vertex where it is now (vertexGeometry's), or empty to compute it.
+  Repair(Triangulation& t, const Surface& surface, std::vector<LocalGeometry> geometry = {})
+      : t_(t), T_(t.mesh), surface_(surface), rings_(vertexRings(t.mesh)),
+        geo_(geometry.empty() ? vertexGeometry(t, surface) : std::move(geometry)) {
     parametric_ = dynamic_cast<const ParametricSurface*>(&surface);
     if (!parametric_ || static_cast<int>(t.uv.size()) != T_.V.rows()) parametric_ = nullptr;
     const int nv = static_cast<int>(T_.V.rows());
@@ -99,6 +101,9 @@ class Repair {
     movedAt_.assign(nv, 0);
     idleAt_.assign(nv, -1);
   }
+
+  // The geometry of every vertex where the sweeps left it (the repair object is spent).
+  std::vector<LocalGeometry> takeGeometry() { return std::move(geo_); }
 
   RepairResult run(int maxSweeps) {
     RepairResult r;
@@ -401,10 +406,9 @@ class Repair {
 // above 8. Stars are judged at their own vertex's geometry, parabolic or planar ones not at all (as
 // checkTriangulation). Returns how many edges were flipped.
 constexpr double kFlipHeight = 0.3;
-int flipAtInvalidStars(Triangulation& t, const Surface& surface) {
+int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo) {
   TriMesh& T = t.mesh;
   const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
-  const std::vector<LocalGeometry> geo = vertexGeometry(t, surface);
   const double edgeMean = T.meanEdgeLength();
   std::vector<std::vector<int>> incident(nv);
   for (int f = 0; f < nf; ++f)
@@ -528,16 +532,16 @@ int flipAtInvalidStars(Triangulation& t, const Surface& surface) {
 RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps) {
   if (triangulation.mesh.F.rows() == 0 || maxSweeps <= 0) return {};
   RepairResult r;
-  {
-    Repair repair(triangulation, surface);
-    r = repair.run(maxSweeps);
-  }
-  // Stars the moves could not make valid: flip edges around them, then move again.
+  Repair repair(triangulation, surface);
+  r = repair.run(maxSweeps);
+  // Stars the moves could not make valid: flip edges around them, then move again (the vertices' geometry as
+  // the moves left it: a flip moves none).
   int flips = 0;
   if (r.invalidAfter > 0) {
-    flips = flipAtInvalidStars(triangulation, surface);
+    std::vector<LocalGeometry> geometry = repair.takeGeometry();
+    flips = flipAtInvalidStars(triangulation, geometry);
     if (flips > 0) {
-      Repair again(triangulation, surface);
+      Repair again(triangulation, surface, std::move(geometry));
       const RepairResult s = again.run(maxSweeps);
       r.invalidAfter = s.invalidAfter;
       r.moved += s.moved;
