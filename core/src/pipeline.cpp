@@ -626,7 +626,15 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // crossing themselves, then the lower planarity, is kept; `duality` says which. (Duality::Auto only.)
   if (params.duality == Duality::Auto) {
     const int crossed = crossing(r.hex);
-    if (!r.solve.converged || crossed > 0) {
+    // The Ceres solvers take seconds to minutes: with them, only a tangent dual planar as it stands is tried.
+    auto worthSolving = [&]() {
+      if (params.solver == PlanarizeMethod::LocalGlobal) return true;
+      const DualMesh tangent = tangentDual(r.triangulation, surface);
+      for (int f = 0; f < tangent.mesh.faceCount(); ++f)
+        if (!(facePlanarity(tangent.mesh, f) <= po.tolerance)) return false;
+      return true;
+    };
+    if ((!r.solve.converged || crossed > 0) && worthSolving()) {
       PipelineResult t;
       solveFrom(t, Duality::Tangent);
       const int tangentCrossed = crossing(t.hex);
