@@ -254,6 +254,19 @@ TriangulationCheck checkTriangulation(const Triangulation& t, const Surface& sur
   return c;
 }
 
+namespace {
+
+// T's triangles but those flagged in `drop` (`dropped` of them), in their order.
+void keepUndropped(TriMesh& T, const std::vector<char>& drop, int dropped) {
+  const int nf = static_cast<int>(T.F.rows());
+  Triangles kept(nf - dropped, 3);
+  for (int f = 0, row = 0; f < nf; ++f)
+    if (!drop[f]) kept.row(row++) = T.F.row(f);
+  T.F = kept;
+}
+
+}  // namespace
+
 int trimBoundarySlivers(Triangulation& triangulation, double ratio) {
   TriMesh& T = triangulation.mesh;
   const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
@@ -277,10 +290,7 @@ int trimBoundarySlivers(Triangulation& triangulation, double ratio) {
     ++dropped;
   }
   if (dropped == 0) return 0;
-  Triangles kept(nf - dropped, 3);
-  for (int f = 0, row = 0; f < nf; ++f)
-    if (!drop[f]) kept.row(row++) = T.F.row(f);
-  T.F = kept;
+  keepUndropped(T, drop, dropped);
   triangulation.notes.push_back(std::to_string(dropped) + " sliver triangles dropped along the boundary (third corner "
                                 "within " + std::to_string(ratio).substr(0, 4) + " of the edge above it)");
   return dropped;
@@ -325,10 +335,7 @@ int openInvalidBoundaryStars(Triangulation& triangulation, const Surface& surfac
     ++dropped;
   }
   if (dropped == 0) return 0;
-  Triangles kept(nf - dropped, 3);
-  for (int f = 0, row = 0; f < nf; ++f)
-    if (!drop[f]) kept.row(row++) = T.F.row(f);
-  T.F = kept;
+  keepUndropped(T, drop, dropped);
   triangulation.notes.push_back(std::to_string(dropped) + " triangles dropped along the boundary where they closed an "
                                 "invalid star (Props 4, 5) of a vertex next to it");
   return dropped;
