@@ -49,7 +49,7 @@ Duality parseDuality(const std::string& name) {
   if (name == "dupin") return Duality::Dupin;
   if (name == "tangent") return Duality::Tangent;
   if (name == "auto") return Duality::Auto;
-  throw Error(ErrorCode::InvalidParameter, "duality must be 'dupin' or 'tangent' (got '" + name + "')");
+  throw Error(ErrorCode::InvalidParameter, "duality must be 'auto', 'dupin' or 'tangent' (got '" + name + "')");
 }
 
 const char* dualityName(Duality d) { return d == Duality::Dupin ? "dupin" : d == Duality::Tangent ? "tangent" : "auto"; }

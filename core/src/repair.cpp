@@ -531,9 +531,8 @@ int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo) 
 
 RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps) {
   if (triangulation.mesh.F.rows() == 0 || maxSweeps <= 0) return {};
-  RepairResult r;
   Repair repair(triangulation, surface);
-  r = repair.run(maxSweeps);
+  RepairResult r = repair.run(maxSweeps);
   // Stars the moves could not make valid: flip edges around them, then move again (the vertices' geometry as
   // the moves left it: a flip moves none).
   int flips = 0;

@@ -302,11 +302,7 @@ int openInvalidBoundaryStars(Triangulation& triangulation, const Surface& surfac
   if (nf == 0) return 0;
   const VertexRings rings = vertexRings(T);
   const std::vector<LocalGeometry> geo = vertexGeometry(triangulation, surface);
-  double edgeMean = 0;
-  for (int f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) edgeMean += (T.V.row(T.F(f, k)) - T.V.row(T.F(f, (k + 1) % 3))).norm();
-  edgeMean /= 3.0 * nf;
-  const std::vector<char> judged = judgedStars(T, rings, geo, edgeMean);
+  const std::vector<char> judged = judgedStars(T, rings, geo, T.meanEdgeLength());
   std::vector<char> drop(nf, 0), touched(nv, 0);
   int dropped = 0;
   for (int v = 0; v < nv; ++v) {

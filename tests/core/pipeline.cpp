@@ -334,6 +334,14 @@ TEST_CASE("pipeline: where the solve from the Dupin dual stalls, the tangent dua
   CHECK(small.duality == Duality::Dupin);
   CHECK(std::string(dualityName(Duality::Auto)) == "auto");
   CHECK(parseDuality("auto") == Duality::Auto);
+  try {  // a bad name is named, with the choices
+    parseDuality("dupn");
+    FAIL("no error");
+  } catch (const Error& e) {
+    CHECK(e.code() == ErrorCode::InvalidParameter);
+    CHECK(std::string(e.what()).find("'dupn'") != std::string::npos);
+    CHECK(std::string(e.what()).find("'auto'") != std::string::npos);
+  }
 }
 
 TEST_CASE("pipeline: a few interior faces left off planar away from the boundary are cut in two as well") {
