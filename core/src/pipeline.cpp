@@ -581,13 +581,17 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   po.fitSurface = params.fitSurface;
   po.surface = &surface;
   const bool seams = r.triangulation.systems > 1;
-  // The dual of `duality` into x.dual / x.initial, and the solve from it into x.hex / x.solve.
-  auto solveFrom = [&](PipelineResult& x, Duality duality) {
+  auto dualOf = [&](Duality duality) {
     report("dualize", 0, std::string(dualityName(duality)) + " duality");
-    x.duality = duality;
-    x.dual = duality == Duality::Dupin ? dupinDual(r.triangulation, surface) : tangentDual(r.triangulation, surface);
-    x.initial = x.dual.mesh;
+    DualMesh dual = duality == Duality::Dupin ? dupinDual(r.triangulation, surface) : tangentDual(r.triangulation, surface);
     clock.done("dualize");
+    return dual;
+  };
+  // `dual` (of `duality`) into x.dual / x.initial, and the solve from it into x.hex / x.solve.
+  auto solveFrom = [&](PipelineResult& x, Duality duality, DualMesh dual) {
+    x.duality = duality;
+    x.dual = std::move(dual);
+    x.initial = x.dual.mesh;
     report("planarize", 0, "planarity optimization");
     x.hex = x.initial;
     x.solve = planarize(x.hex, po, progress, cancel);
@@ -618,7 +622,8 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     for (int f = 0; f < m.faceCount(); ++f) n += faceSelfIntersects(m, f);
     return n;
   };
-  solveFrom(r, params.duality == Duality::Auto ? Duality::Dupin : params.duality);
+  const Duality asked = params.duality == Duality::Auto ? Duality::Dupin : params.duality;
+  solveFrom(r, asked, dualOf(asked));
   // Where the solve from the Dupin dual stalls short of the tolerance or leaves faces crossing themselves,
   // the tangent dual (§4.1) is tried as well: its faces lie in the tangent planes at their vertices, so on
   // a triangulation along a conjugate network it is planar as it stands (the cyclide's lattice at 3000 to
@@ -627,16 +632,16 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   if (params.duality == Duality::Auto) {
     const int crossed = crossing(r.hex);
     // The Ceres solvers take seconds to minutes: with them, only a tangent dual planar as it stands is tried.
-    auto worthSolving = [&]() {
-      if (params.solver == PlanarizeMethod::LocalGlobal) return true;
-      const DualMesh tangent = tangentDual(r.triangulation, surface);
-      for (int f = 0; f < tangent.mesh.faceCount(); ++f)
-        if (!(facePlanarity(tangent.mesh, f) <= po.tolerance)) return false;
+    auto planarAsItStands = [&](const DualMesh& dual) {
+      for (int f = 0; f < dual.mesh.faceCount(); ++f)
+        if (!(facePlanarity(dual.mesh, f) <= po.tolerance)) return false;
       return true;
     };
-    if ((!r.solve.converged || crossed > 0) && worthSolving()) {
+    std::optional<DualMesh> tangent;
+    if (!r.solve.converged || crossed > 0) tangent = dualOf(Duality::Tangent);
+    if (tangent && (params.solver == PlanarizeMethod::LocalGlobal || planarAsItStands(*tangent))) {
       PipelineResult t;
-      solveFrom(t, Duality::Tangent);
+      solveFrom(t, Duality::Tangent, std::move(*tangent));
       const int tangentCrossed = crossing(t.hex);
       if (tangentCrossed < crossed || (tangentCrossed == crossed && t.solve.planarityMax < r.solve.planarityMax)) {
         r.duality = Duality::Tangent;
