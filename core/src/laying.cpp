@@ -204,10 +204,22 @@ SurfacePoint pointAtArc(const SurfaceWalker& walker, const std::vector<SurfacePo
 class PointGrid {
  public:
   explicit PointGrid(double spacing) : spacing_(spacing), keys_(kInitialSlots), slots_(kInitialSlots, -1) {}
-  void insert(int id, const Vec3& p) { cells_[cellFor(key(cellOf(p)))].push_back(id); }
+  // Adds point `id` at p; returns the index of its cell (0, 1, ... in order of first use).
+  int insert(int id, const Vec3& p) {
+    const int cell = cellFor(key(cellOf(p)));
+    cells_[cell].push_back(id);
+    return cell;
+  }
   // Visits (at least) every point closer than radius to p: the points of the cells the box p +- radius meets.
   template <class Visit>
   void forNear(const Vec3& p, double radius, Visit visit) const {
+    forNearCells(p, radius, [&](int cell) {
+      for (int id : cells_[cell]) visit(id);
+    });
+  }
+  // The same cells, by index (those holding a point).
+  template <class Visit>
+  void forNearCells(const Vec3& p, double radius, Visit visit) const {
     const double reach = radius * (1 + 1e-9) + 1e-9 * spacing_;  // beyond round-off in the cell indices
     const Eigen::Array3d lo = (p.array() - reach) / spacing_, hi = (p.array() + reach) / spacing_;
     std::int64_t a[3], b[3];
@@ -222,8 +234,7 @@ class PointGrid {
       for (std::int64_t y = a[1]; y <= b[1]; ++y)
         for (std::int64_t z = a[2]; z <= b[2]; ++z) {
           const int cell = find(key({x, y, z}));
-          if (cell >= 0)
-            for (int id : cells_[cell]) visit(id);
+          if (cell >= 0) visit(cell);
         }
   }
 
@@ -1536,6 +1547,13 @@ int Laying::fillGaps() {
   // no triangle in a pass is looked at again only once a vertex near it has changed since.
   int stamp = 0;
   std::vector<int> touched(nv, 0);
+  // The grid cell of each vertex in it (-1: none), and per cell the latest stamp of its vertices: whether a
+  // vertex near an edge changed is then a look at the cells around it, not at every vertex in them.
+  std::vector<int> cellOfVertex(nv, -1), cellStamp;
+  auto touch = [&](int v) {
+    touched[v] = stamp;
+    if (cellOfVertex[v] >= 0) cellStamp[cellOfVertex[v]] = stamp;  // stamps only grow
+  };
   auto addEdges = [&](int t) {
     const Eigen::Vector3i& tri = triangles_[t];
     for (int c = 0; c < 3; ++c) {
@@ -1543,7 +1561,7 @@ int Laying::fillGaps() {
       if (!open.erase(edgeKey(y, x))) open.insert(edgeKey(x, y));
       incident[tri(c)].push_back(t);
       used[tri(c)] = 1;
-      touched[tri(c)] = stamp;
+      touch(tri(c));
     }
   };
   for (int t = 0; t < static_cast<int>(triangles_.size()); ++t) addEdges(t);
@@ -1556,8 +1574,14 @@ int Laying::fillGaps() {
   auto has = [&](int a, int b) { return triangleWith(a, b) >= 0; };
   auto boundary = [&](int a, int b) { return has(a, b) && !has(b, a); };
   PointGrid grid(reach);
+  auto gridInsert = [&](int v) {
+    const int cell = grid.insert(v, vertices_[v].point());
+    cellOfVertex[v] = cell;
+    if (cell >= static_cast<int>(cellStamp.size())) cellStamp.resize(cell + 1, 0);
+    cellStamp[cell] = std::max(cellStamp[cell], touched[v]);
+  };
   for (int v = 0; v < nv; ++v)
-    if (used[v]) grid.insert(v, vertices_[v].point());
+    if (used[v]) gridInsert(v);
   auto at = [&](int v) -> const Vec3& { return vertices_[v].point(); };
 
   struct Candidate {
@@ -1648,7 +1672,7 @@ int Laying::fillGaps() {
     const auto it = failed[kind].find(edgeKey(a, b));
     if (it == failed[kind].end()) return true;
     bool changed = false;
-    grid.forNear(0.5 * (at(a) + at(b)), reach, [&](int v) { changed = changed || touched[v] > it->second; });
+    grid.forNearCells(0.5 * (at(a) + at(b)), reach, [&](int c) { changed = changed || cellStamp[c] > it->second; });
     return changed;
   };
   std::unordered_map<std::int64_t, bool> outside;  // alongBoundary, once per edge
@@ -1727,6 +1751,7 @@ int Laying::fillGaps() {
         incident.emplace_back();
         used.push_back(0);
         touched.push_back(stamp);
+        cellOfVertex.push_back(-1);
         double sine = 0;
         const bool fits = admissible(a, b, q, sine);
         vertices_.pop_back();  // addVertex puts it back with the rest of the laying's bookkeeping
@@ -1734,10 +1759,11 @@ int Laying::fillGaps() {
           incident.pop_back();
           used.pop_back();
           touched.pop_back();
+          cellOfVertex.pop_back();
           continue;
         }
         addVertex(p, std::numeric_limits<double>::quiet_NaN());
-        grid.insert(q, p.point());
+        gridInsert(q);
         triangles_.emplace_back(b, a, q);
         addEdges(static_cast<int>(triangles_.size()) - 1);
         ++inserted;
