@@ -344,16 +344,17 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       }
       const std::string& startNote = choice.note;
       const double trialCell = choice.trialCell, trialVertices = choice.trialVertices;
-      // The trial lay from the chosen start already measured how far the vertex count falls short of the area
-      // estimate (layers stopping short leave parts uncovered): when by more than 10 %, start from the cell it
-      // predicts, and the secant below takes it as its first point, which saves a lay. (A trial with more
-      // vertices than the estimate says little: coarse rows are resampled to keep a minimum count.)
+      // The trial lay from the chosen start already measured how far the vertex count misses the area estimate
+      // (layers stopping short leave parts uncovered; ideal triangles along a conjugate network are not
+      // equilateral, and on the uploaded wave roof they are so much smaller that the area estimate's cell gave
+      // 18k vertices for 10k asked): when by more than 10 %, start from the cell it predicts, and the secant
+      // below takes it as its first point, which saves a lay (the wave roof at 10k faces: one lay, not two).
       // If that cell cannot be laid, the area estimate's is, as without the trial. Only for an uploaded mesh,
       // whose lays are the slowest (closest points on the mesh); an analytic surface keeps the area estimate.
       bool fromTrial = params.mesh && params.cell == 0 && trialVertices > 0 && trialCell > cell &&
-                       trialVertices * trialCell * trialCell / (cell * cell) < params.faces / 1.1;
+                       std::abs(std::log(trialVertices * trialCell * trialCell / (cell * cell) / params.faces)) > std::log(1.1);
       if (fromTrial) {
-        lo.cell = std::clamp(trialCell * std::sqrt(trialVertices / params.faces), 0.5 * cell, cell);
+        lo.cell = std::clamp(trialCell * std::sqrt(trialVertices / params.faces), 0.5 * cell, 2 * cell);
         if (std::pow(cellForFaceCount(*t.surface, 1) / lo.cell, 2) > kMaxFaces) lo.cell = cell;
         try {
           t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
@@ -448,8 +449,8 @@ double polygonCrosses(const Points& V, const std::vector<int>& ids) {
 // faces, a pentagon and two hexagons where a row along the boundary was resampled close to the parabolic
 // curve: the pentagon needle-thin, the edge between the hexagons shrunk to nothing, every further step
 // folding one of them). Those touching a panel are cut too: cutting only the panel left one there folded.
-// Where more are off, only the crossing panels are cut (cutting the others would not help) — unless the
-// surface was laid in several systems of rows (`seams`): where systems meet, and where their rows run along
+// Where more are off, only the crossing panels are cut (the solve may only be slow there) — unless it
+// stalled (`stalled`, kStalledShare below), or the surface was laid in several systems of rows (`seams`): where systems meet, and where their rows run along
 // a parabolic ring, the faces are not shaped for planarity and every one left off is cut (on the bumps at
 // 2000 faces, 36 of 1963; the solve then reaches the tolerance instead of stalling at 3e-3). `resolve` says
 // whether solving again can reach the tolerance: a face off planar was cut and no interior face away from
@@ -461,14 +462,21 @@ constexpr std::size_t kFewInteriorShare = 5000;
 // Rounds of cuts and solves: two, and on a surface of several systems four (each solve can stall at faces
 // the previous one left shaped for folding: the bumps at 8000 faces stopped at 1e-7 after two).
 constexpr int kSeamRounds = 4;
+// A solve that stalled (it stopped before its iteration cap, short of the tolerance) cannot get further
+// from where it is: its faces off planar are cut wherever they are at most one in kStalledShare of the
+// faces, on any surface, with as many rounds as on seams. The uploaded cyclide laid at cell 0.23 (909
+// faces, 13 invalid stars left by the coarse lay) stalled at 9e-5 with 19 of its faces off planar; cut,
+// it converges. (A solve stopped by the cap is only slow there: it keeps the few-faces rule.)
+constexpr std::size_t kStalledShare = 20;
 // Of two diagonals, one whose ends are already corners of more than three faces is taken only where it leaves
 // the pieces this much nearer planar (per such end), so that cuts spread rather than pile up at a vertex.
 constexpr double kCrowdedCut = 1.0;
 struct PanelCut {
   int panels = 0, interior = 0;  // boundary panels and interior faces cut
   bool resolve = false;
+  bool stalledRule = false;  // interior faces were cut only because the solve stalled (kStalledShare)
 };
-PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingOnly, bool seams) {
+PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingOnly, bool seams, bool stalled) {
   std::vector<char> cut(r.hex.faceCount(), 0), crossing(r.hex.faceCount(), 0), held(r.hex.V.rows(), 0);
   std::vector<int> interiorOff;
   int count = 0;
@@ -495,8 +503,10 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
     away = away || !touches;
   }
   int interior = 0;
+  bool stalledRule = false;
   const std::size_t fewOff = std::max(kFewInteriorOff, static_cast<std::size_t>(r.hex.faceCount()) / kFewInteriorShare);
-  const bool few = seams || interiorOff.size() <= fewOff;
+  const bool few = seams || interiorOff.size() <= fewOff ||
+                   (stalled && interiorOff.size() <= static_cast<std::size_t>(r.hex.faceCount()) / kStalledShare);
   if (crossingOnly || (away && !few)) {  // only the crossing panels (and faces)
     count = 0;
     for (int f = 0; f < r.hex.faceCount(); ++f) {
@@ -505,6 +515,7 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
     }
   } else if (away || (seams && !interiorOff.empty())) {
     for (int f : interiorOff) cut[f] = 1, ++interior;
+    stalledRule = !seams && interiorOff.size() > fewOff;
   }
   if (count + interior == 0) return {};
   std::vector<int> faces(r.hex.V.rows(), 0);  // faces at each vertex, cuts so far included
@@ -547,7 +558,7 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
   r.hex = std::move(hex);
   r.dual.faceVertex = std::move(faceVertex);
   r.dual.boundaryFace = std::move(boundary);
-  return {count, interior, !crossingOnly && (offPlanarCut || interior > 0) && (!away || few)};
+  return {count, interior, !crossingOnly && (offPlanarCut || interior > 0) && (!away || few), stalledRule};
 }
 
 }  // namespace
@@ -588,6 +599,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     return dual;
   };
   // `dual` (of `duality`) into x.dual / x.initial, and the solve from it into x.hex / x.solve.
+  bool stalledCuts = false;  // a solve reached the tolerance only through cuts its stall allowed
   auto solveFrom = [&](PipelineResult& x, Duality duality, DualMesh dual) {
     x.duality = duality;
     x.dual = std::move(dual);
@@ -598,16 +610,21 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     // Boundary panels that stay off planar or cross themselves (and a few interior faces left off planar) are
     // cut in two and the solve goes on from there (twice at most, four times on a surface of several
     // systems); after the last solve, panels it left crossing themselves are cut once more.
-    const int last = seams ? kSeamRounds : 2;
+    int lastSolve = x.solve.iterations;  // iterations of the latest solve alone
+    const bool stalledFirst = !x.solve.converged && lastSolve < po.maxIterations;
+    const int last = seams || stalledFirst ? kSeamRounds : 2;
     for (int round = 0; round <= last && params.splitBoundaryPanels; ++round) {
-      const PanelCut cut = splitBoundaryPanels(x, po.tolerance, round == last, seams);
+      const bool stalled = !x.solve.converged && lastSolve < po.maxIterations;
+      const PanelCut cut = splitBoundaryPanels(x, po.tolerance, round == last, seams, stalled);
       x.boundaryPanelsSplit += cut.panels;
       x.interiorFacesSplit += cut.interior;
+      stalledCuts = stalledCuts || cut.stalledRule;
       if (!cut.resolve || round == last) break;
       // Again from lambda = 1, now anchored at the positions reached (starting at the small lambda the first
       // solve ended with took as long on the uploaded wave roof at 10k faces, 12 iterations against 14).
       const PlanarizeReport first = x.solve;
       x.solve = planarize(x.hex, po, progress, cancel);
+      lastSolve = x.solve.iterations;
       x.solve.iterations += first.iterations;
       x.solve.rounds += first.rounds;
       x.solve.initialPlanarityMax = first.initialPlanarityMax;
@@ -624,11 +641,16 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   };
   const Duality asked = params.duality == Duality::Auto ? Duality::Dupin : params.duality;
   solveFrom(r, asked, dualOf(asked));
+  const bool dupinStalled = stalledCuts;
   // Where the solve from the Dupin dual stalls short of the tolerance or leaves faces crossing themselves,
   // the tangent dual (§4.1) is tried as well: its faces lie in the tangent planes at their vertices, so on
   // a triangulation along a conjugate network it is planar as it stands (the cyclide's lattice at 3000 to
   // 13000 faces, where the solve from the Dupin dual stalls at 2e-8 to 2e-7). The one with fewer faces
-  // crossing themselves, then the lower planarity, is kept; `duality` says which. (Duality::Auto only.)
+  // crossing themselves, then the converged one, then (both converged) the one with fewer interior faces
+  // cut, then the lower planarity, is kept; `duality` says which. A Dupin solve that reached the tolerance
+  // only by the cuts a stall allows counts as stalled here: the tangent dual may need none (the cyclide's
+  // lattice at 3000 faces: 0 iterations and no cut, where the Dupin dual needed 20 faces cut).
+  // (Duality::Auto only.)
   if (params.duality == Duality::Auto) {
     const int crossed = crossing(r.hex);
     // The Ceres solvers take seconds to minutes: with them, only a tangent dual planar as it stands is tried.
@@ -638,12 +660,17 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
       return true;
     };
     std::optional<DualMesh> tangent;
-    if (!r.solve.converged || crossed > 0) tangent = dualOf(Duality::Tangent);
+    if (!r.solve.converged || crossed > 0 || dupinStalled) tangent = dualOf(Duality::Tangent);
     if (tangent && (params.solver == PlanarizeMethod::LocalGlobal || planarAsItStands(*tangent))) {
       PipelineResult t;
       solveFrom(t, Duality::Tangent, std::move(*tangent));
       const int tangentCrossed = crossing(t.hex);
-      if (tangentCrossed < crossed || (tangentCrossed == crossed && t.solve.planarityMax < r.solve.planarityMax)) {
+      const bool better =
+          tangentCrossed != crossed                        ? tangentCrossed < crossed
+          : t.solve.converged != r.solve.converged           ? t.solve.converged
+          : t.solve.converged && t.interiorFacesSplit != r.interiorFacesSplit ? t.interiorFacesSplit < r.interiorFacesSplit
+                                                             : t.solve.planarityMax < r.solve.planarityMax;
+      if (better) {
         r.duality = Duality::Tangent;
         r.dual = std::move(t.dual);
         r.initial = std::move(t.initial);

@@ -68,7 +68,8 @@ Options of `phex run`:
   --split-boundary on|off   a boundary panel left off planar (every face away from it planar), or one
                             that crosses itself, is cut in two along its best diagonal and the solve
                             goes on; so are up to 8 interior faces left off planar, or all of
-                            them on a surface laid in several systems of rows (default on)
+                            them on a surface laid in several systems of rows or where the solve
+                            stalled (at most 1 in 20 faces) (default on)
   --out FILE                write the P-Hex mesh (for triangulate: the triangulation, OBJ)
   --format obj|ply|json     output format (default from the extension, else obj); json carries
                             the per-face metrics

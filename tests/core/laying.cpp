@@ -491,9 +491,16 @@ TEST_CASE("laying: across a parabolic curve the rows follow its zero-curvature d
   CHECK(across.metrics.selfIntersectingCount <= 0.001 * across.metrics.faceCount);
   CHECK(across.interiorHexagonFraction >= 0.99);
   // Along the curve the solve stalls far from the tolerance (before the Dupin dual was untangled where faces
-  // cross themselves, at least 10 faces folded there too).
-  CHECK(!along.solve.converged);
-  CHECK(along.metrics.planarityMax > 1e-6);
+  // cross themselves, at least 10 faces folded there too); it reaches it only by cutting tens of faces in two
+  // (38 of 2056), and hexagons are fewer.
+  CHECK((!along.solve.converged || along.interiorFacesSplit >= 10));
+  CHECK(along.interiorHexagonFraction < across.interiorHexagonFraction - 0.02);
+  CHECK(across.interiorFacesSplit == 0);
+  p.splitBoundaryPanels = false;
+  const PipelineResult uncut = runPipeline(p);
+  INFO("along, uncut: planarity " << uncut.metrics.planarityMax);
+  CHECK(!uncut.solve.converged);
+  CHECK(uncut.metrics.planarityMax > 1e-6);
 }
 
 TEST_CASE("laying: rows are not resampled on a parabolic curve") {

@@ -309,24 +309,31 @@ TEST_CASE("pipeline: a boundary panel left off planar is cut in two, and the sol
 TEST_CASE("pipeline: where the solve from the Dupin dual stalls, the tangent dual is solved from as well") {
   // The cyclide's lattice runs along its curvature lines, a conjugate network: the tangent dual's faces lie in
   // their vertices' tangent planes, planar as they stand, while the solve from the Dupin dual stalls at 2e-7
-  // near the parabolic circles. Under auto the tangent dual wins and says so; asked for, Dupin stays.
+  // near the parabolic circles (and reaches the tolerance only by cutting the faces left off). Under auto
+  // the tangent dual wins, uncut, and says so; asked for, Dupin stays.
   PipelineParams p;
   p.surface = "cyclide";
   p.faces = 3000;
   p.duality = Duality::Dupin;
+  p.splitBoundaryPanels = false;
+  const PipelineResult stalled = runPipeline(p);
+  INFO("dupin uncut: planarity " << stalled.metrics.planarityMax);
+  REQUIRE_FALSE(stalled.solve.converged);
+  p.splitBoundaryPanels = true;
   const PipelineResult dupin = runPipeline(p);
-  INFO("dupin: planarity " << dupin.metrics.planarityMax);
-  REQUIRE_FALSE(dupin.solve.converged);
+  INFO("dupin: planarity " << dupin.metrics.planarityMax << ", " << dupin.interiorFacesSplit << " faces cut");
   CHECK(dupin.duality == Duality::Dupin);
+  CHECK((!dupin.solve.converged || dupin.interiorFacesSplit > 0));
   p.duality = Duality::Auto;
   const PipelineResult r = runPipeline(p);
   INFO("auto: " << dualityName(r.duality) << ", planarity " << r.metrics.planarityMax);
   CHECK(r.duality == Duality::Tangent);
+  CHECK(r.interiorFacesSplit == 0);
   CHECK(r.solve.converged);
   CHECK(r.metrics.planarityMax <= 1e-9);
   CHECK(r.metrics.selfIntersectingCount == 0);
   CHECK(r.metrics.surfaceDistanceMax < 0.002);
-  CHECK(r.hex.faceCount() == dupin.hex.faceCount());
+  CHECK(r.hex.faceCount() == stalled.hex.faceCount());
   // Where the solve from the Dupin dual reaches the tolerance, auto is Dupin.
   p.faces = 2000;
   const PipelineResult small = runPipeline(p);
@@ -382,13 +389,43 @@ TEST_CASE("pipeline: a few interior faces left off planar away from the boundary
   CHECK(cut.interiorHexagonFraction < whole.interiorHexagonFraction);
 }
 
+TEST_CASE("pipeline: a solve that stalls with more than a few interior faces off planar has them cut") {
+  // The sampled cyclide laid coarsely (cell 0.23, about 900 faces): the lay leaves a dozen invalid stars,
+  // and the solve stalls near 1e-4 with more interior faces off planar than the few-faces rule cuts. Having
+  // stalled, it cuts every one of them and converges without folding a face.
+  PipelineParams p;
+  p.mesh = sampledUpload("cyclide", 30000);
+  p.cell = 0.23;
+  p.duality = Duality::Dupin;
+  p.splitBoundaryPanels = false;
+  const PipelineResult whole = runPipeline(p);
+  INFO("whole: planarity " << whole.metrics.planarityMax << ", iterations " << whole.solve.iterations);
+  REQUIRE_FALSE(whole.solve.converged);
+  REQUIRE(whole.solve.iterations < p.maxIterations);  // stalled, not capped
+  int interiorOff = 0;
+  for (int f = 0; f < whole.hex.faceCount(); ++f)
+    interiorOff += !whole.dual.boundaryFace[f] && whole.metrics.planarity[f] > p.tolerance;
+  INFO("interior faces off planar: " << interiorOff);
+  REQUIRE(interiorOff > 8);
+  REQUIRE(interiorOff <= whole.hex.faceCount() / 20);
+  p.splitBoundaryPanels = true;
+  const PipelineResult cut = runPipeline(p);
+  INFO("cut: " << cut.interiorFacesSplit << " interior faces, planarity " << cut.metrics.planarityMax);
+  CHECK(cut.solve.converged);
+  CHECK(cut.metrics.selfIntersectingCount == 0);
+  CHECK(cut.interiorFacesSplit > 8);
+  CHECK(cut.interiorFacesSplit <= cut.hex.faceCount() / 20);
+}
+
 TEST_CASE("pipeline: rows ending on an uploaded mesh's boundary keep its P-Hex vertices on the mesh") {
   // The wave roof sampled by its lattice (60k vertices) has a zigzag boundary polyline along two of its sides:
   // every other lattice row ends half a lattice step short, about 0.2 cell at 10000 faces. Method 2's rows end
   // on the boundary there; an edge between two row ends joined along the boundary has its P-Hex vertex at about
   // its midpoint, which between two teeth of the zigzag lies off the mesh. Such ends stay unjoined (measured:
   // distance 6.0e-5 of the diagonal, 3.6e-5 with rows ending short of the boundary, 1.3e-3 with every end
-  // joined; coverage 0.980, was 0.968; shortest triangulation edge 0.51 of the mean, no interior face cut).
+  // joined; coverage 0.980, was 0.968; shortest triangulation edge 0.51 of the mean, no interior face cut —
+  // at the cell the area estimate gave. The cell the start trial predicts lays 9800 vertices, not 10700:
+  // shortest edge 0.45 of the mean.)
   PipelineParams p;
   p.mesh = sampledUpload("wave-roof", 60000);
   p.faces = 10000;
@@ -401,7 +438,7 @@ TEST_CASE("pipeline: rows ending on an uploaded mesh's boundary keep its P-Hex v
   CHECK(r.metrics.selfIntersectingCount == 0);
   CHECK(r.metrics.surfaceDistanceMax < 2e-4);
   CHECK(r.check.coverage > 0.975);
-  CHECK(r.check.edgeMin >= 0.45 * r.check.edgeMean);
+  CHECK(r.check.edgeMin >= 0.4 * r.check.edgeMean);
   CHECK(r.interiorFacesSplit == 0);
   CHECK(notes.find("row ends moved onto the boundary") != std::string::npos);
 }
