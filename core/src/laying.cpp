@@ -291,6 +291,20 @@ class PointGrid {
   std::vector<std::vector<int>> cells_;  // the points of each occupied cell, in insertion order
 };
 
+// A lay that reaches kVertexExcess times the vertices its surface holds at the cell (plus kVertexSlack, for
+// coarse cells whose rows keep a minimum count) has run its layers over each other: Method 1 on a cone along
+// its principal directions laid 16k vertices where 700 fit, one front circling on and on, and would have gone
+// on to maxLayers for minutes. Lays that cover the surface stay far below: thin layers at the §5.3 lower bound
+// hold about three times the estimate, and the uploaded wave roof's ideal triangles 1.8 times.
+constexpr double kVertexExcess = 10;
+constexpr double kVertexSlack = 5000;
+std::size_t vertexLimit(const Surface& surface, double cell) {
+  const bool known = dynamic_cast<const MeshSurface*>(&surface) || dynamic_cast<const ParametricSurface*>(&surface);
+  const double area = known ? surfaceArea(surface) : surface.bounds().diagonal().squaredNorm();
+  const double expected = area / (std::sqrt(3.0) / 2 * cell * cell);
+  return static_cast<std::size_t>(std::min(kVertexExcess * expected + kVertexSlack, 2e9));
+}
+
 // Passes of Method 1's (1, 2, 1) / 4 smoothing per layer at `cell`: one at about kSmoothingFaces faces, and
 // growing as 1 / cell. A Surface other than a mesh or a parametric one (whose area is not known) gets one.
 int progressiveSmoothingPasses(const Surface& surface, double cell) {
@@ -319,7 +333,8 @@ class Laying {
         cancel_(cancel),
         grid_(options.cell),
         smoothingPasses_(options.method == LayingMethod::Progressive ? progressiveSmoothingPasses(walker.surface(), options.cell)
-                                                                     : 1) {}
+                                                                     : 1),
+        vertexLimit_(vertexLimit(walker.surface(), options.cell)) {}
 
   Triangulation run(const SurfacePoint& start, const Vec3& initial);
 
@@ -347,8 +362,10 @@ class Laying {
   bool chordOnSurface(const SurfacePoint& a, const SurfacePoint& b) const;
   Segment segment(const Row& row, int i) const;
   std::vector<std::optional<Apex>> progressiveApexes(const Row& row, const std::vector<Segment>& segments) const;
+  // `fromL0`: the row is the first system's L0, where a segment along an asymptotic direction is the field's
+  // doing (fail); on later rows such a segment gets no apex.
   std::vector<std::optional<Apex>> prespecifiedApexes(const Row& row, const std::vector<Segment>& segments, Row& next,
-                                                      bool recordConjugateLines);
+                                                      bool recordConjugateLines, bool fromL0);
   bool collides(const Vec3& p, double radius) const;
   void addTriangle(int a, int b, int c);
   bool overlapsLaid(int a, int b, const SurfacePoint& c);
@@ -380,6 +397,7 @@ class Laying {
   std::vector<Front> fronts_;
   std::size_t systemFront0_ = 0;  // fronts_[systemFront0_ ..] belong to the system being laid (see run)
   int systems_ = 0;               // systems of rows laid, each from its own L0
+  std::size_t vertexLimit_;       // more vertices than this: the layers run over each other (vertexLimit)
   std::vector<std::vector<Vec3>> fieldLines_;
   mutable std::vector<Vec2> ellPlane_;  // crossCurve's scratch: l in the tangent plane
 
@@ -401,6 +419,13 @@ void Laying::cannotTile(const SurfacePoint& where, const std::string& why) const
 }
 
 int Laying::addVertex(const SurfacePoint& p, double ratio, double height) {
+  if (vertices_.size() >= vertexLimit_) {
+    std::ostringstream msg;
+    msg << "the layers ran over each other instead of covering the surface: " << vertices_.size()
+        << " vertices laid, " << kVertexExcess << " times what the surface holds at cell " << o_.cell
+        << "; choose the other method, another field or another start point";
+    cannotTile(p, msg.str());
+  }
   if (static_cast<int>(vertices_.size()) >= o_.maxVertices) {
     std::ostringstream msg;
     msg << "cell " << o_.cell << " is too small for this surface: more than maxVertices = " << o_.maxVertices
@@ -701,7 +726,7 @@ std::optional<Crossing> Laying::crossCurve(const LocalGeometry& g, const FlowLin
 // the D_F flow line fitting the ideal apexes (least squares over its start on the middle l), raised until its
 // crossings with every l_i lie above DE (so every star is valid); crossings still below DE are dropped.
 std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, const std::vector<Segment>& segments,
-                                                            Row& next, bool recordConjugateLines) {
+                                                            Row& next, bool recordConjugateLines, bool fromL0) {
   const int n = static_cast<int>(segments.size());
   // The l_i are traced lazily: first a little beyond the ideal step, where the next base curve crosses them
   // as a rule, and on to their full length kEllLength * step only where a crossing is not found on the part
@@ -735,15 +760,22 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
     if (s.degenerate) continue;
     std::optional<Vec3> d = s.asymptotic ? std::nullopt : field_.direction(s.M, G_, &s.left);
     const Vec3 ab = vertices_[row.ids[(i + 1) % row.ids.size()]].point() - vertices_[row.ids[i]].point();
+    bool asymptotic = s.asymptotic;
     if (d && d->cross(ab.normalized()).norm() < kMinConjugateSine) {
       const double k1 = std::abs(s.M.g.k1), k2 = std::abs(s.M.g.k2);
       // Near a parabolic curve the conjugate degenerates (§5.3), near an umbilic D_G is undefined: lay across
       // as Method 1 would. Elsewhere AB runs along an asymptotic direction.
-      if (std::min(k1, k2) > kNearParabolic * std::max(k1, k2) && !field_.isUmbilic(s.M.g))
-        cannotTile(s.M, kAsymptoticBase);
+      if (std::min(k1, k2) > kNearParabolic * std::max(k1, k2) && !field_.isUmbilic(s.M.g)) asymptotic = true;
       d = s.left;
     }
-    if (s.asymptotic) cannotTile(s.M, kAsymptoticBase);
+    if (asymptotic) {
+      // On L0 the field runs along an asymptotic direction: no valid triangle anywhere along it. On a later
+      // row a segment that left the field (a row end moved onto the boundary; on a helicoid of radius 3 at
+      // 1150 faces, one at the tenth layer, which failed the whole lay) gets no apex, and its front splits.
+      if (fromL0) cannotTile(s.M, kAsymptoticBase);
+      if (!s.asymptotic && !asymptoticStops_++) firstAsymptoticStop_ = describe(walker_, s.M);  // (else counted)
+      continue;
+    }
     if (!d) continue;  // a singularity of D_G: no apex here
     toBoundary[i] = onBoundary_[row.ids[i]] || onBoundary_[row.ids[(i + 1) % row.ids.size()]];
     ells[i].emplace(field_, G_, s.M, *d, kEllLength * (toBoundary[i] ? std::max(s.step, meanStep) : s.step), false);
@@ -1162,7 +1194,8 @@ void Laying::layLayer(std::size_t f, double stepScale) {
   Row next;
   std::vector<std::optional<Apex>> apexes = o_.method == LayingMethod::Progressive
                                                 ? progressiveApexes(A, segments)
-                                                : prespecifiedApexes(A, segments, next, layers_ < 2);
+                                                : prespecifiedApexes(A, segments, next, layers_ < 2,
+                                                                     fronts_[f].layers == 0 && systems_ == 1);
   // A loop shrunk to a few vertices (closing onto an umbilic or a pole) lays its last rows over the ones before.
   const bool shrunk = A.closed && count < kShrunkLoop;
   for (int i = 0; i < n; ++i)
@@ -1940,9 +1973,12 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
   note(invalidDrops_ > 0, "Method 2: " + std::to_string(invalidDrops_) +
                               " apexes dropped where the D_F flow line could not be kept above DE (the star would "
                               "be invalid), first near " + firstInvalidDrop_ + "; laying stopped there");
-  note(asymptoticStops_ > 0, "Method 1 rows turned onto an asymptotic direction (no valid triangle there) on " +
+  note(asymptoticStops_ > 0, std::string(o_.method == LayingMethod::Progressive ? "Method 1" : "Method 2") +
+                                 " rows turned onto an asymptotic direction (no valid triangle there) on " +
                                  std::to_string(asymptoticStops_) + " segments, first near " + firstAsymptoticStop_ +
-                                 "; those fronts stopped there (the prespecified method keeps rows on the field)");
+                                 (o_.method == LayingMethod::Progressive
+                                      ? "; those fronts stopped there (the prespecified method keeps rows on the field)"
+                                      : "; no apex there (a row end that left the field), the row split there"));
   note(layers_ >= o_.maxLayers, "stopped at maxLayers = " + std::to_string(o_.maxLayers));
   if (!seeds.empty()) {
     std::string list;

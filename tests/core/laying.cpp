@@ -585,3 +585,57 @@ TEST_CASE("laying: where rows end on the boundary of an elliptic patch, the star
   CHECK(hasNote(t.triangulation, "closed an invalid star"));
   CHECK(hasNote(t.triangulation, "row ends moved onto the boundary"));
 }
+
+TEST_CASE("laying: layers that run over each other stop with an error instead of going on to maxLayers") {
+  // Method 1 along the principal directions of a cone (a developable: the step is re-used on every layer),
+  // rows along the circles: one front circled on over laid triangles, 16k vertices where 700 fit, and would
+  // have gone on for minutes. The lay stops at ten times the vertices the surface holds and says why.
+  const ParametricSurfacePtr s = makeSurface("cone", {{"angle", 34.57}});
+  LayingOptions o = options(0.19221591581912195);
+  o.start = Vec3(0, 0, 1.235150366965118);
+  o.base = BaseFamily::Conjugate;
+  try {
+    const Triangulation t = layTriangulation(*s, o);
+    INFO("laid " << t.mesh.V.rows() << " vertices");
+    FAIL("no error");
+  } catch (const Error& e) {
+    CHECK(e.code() == ErrorCode::CannotTile);
+    CHECK(std::string(e.what()).find("ran over each other") != std::string::npos);
+  }
+  // The pipeline, whose start trials met this lay, goes on from the other start and finishes.
+  PipelineParams p;
+  p.surface = "cone";
+  p.surfaceParams = {{"angle", 34.57}};
+  p.method = TriangulationMethod::Progressive;
+  p.faces = 1346;
+  const PipelineResult r = runPipeline(p);
+  CHECK(r.hex.faceCount() > 0);
+  CHECK(r.interiorFacesSplit <= r.hex.faceCount() / 10);
+}
+
+TEST_CASE("laying: a Method 2 row that leaves the field onto an asymptotic direction after L0 loses an apex, not the lay") {
+  // A helicoid of radius 3 at 1150 faces: at the tenth layer one row segment (a row end) ran along an
+  // asymptotic direction, and the whole triangulation failed with "the base curve runs along an asymptotic
+  // direction" though the field is principal. Only L0 fails that way; later rows get no apex there.
+  PipelineParams p;
+  p.surface = "helicoid";
+  p.surfaceParams = {{"radius", 2.985}};
+  p.faces = 1153;
+  const PipelineResult r = runPipeline(p);
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+  CHECK(r.check.invalidStars.empty());
+  // Along an asymptotic direction from L0 on, it still fails clearly (the wave roof along angle:-46).
+  PipelineParams q;
+  q.surface = "wave-roof";
+  q.surfaceParams = {{"size", 2.61}, {"bend", 0.7252}};
+  q.field = "angle:-46";
+  q.faces = 1765;
+  try {
+    runPipeline(q);
+    FAIL("no error");
+  } catch (const Error& e) {
+    CHECK(e.code() == ErrorCode::CannotTile);
+    CHECK(std::string(e.what()).find("asymptotic direction") != std::string::npos);
+  }
+}
