@@ -280,8 +280,9 @@ export interface RunParams {
    * 'on' (default): a boundary panel the solve leaves off planar, while every face away from it is planar
    * (where a boundary meets a parabolic curve a panel can have no planar shape that does not fold), or one
    * that crosses itself, is cut in two along its best diagonal and the solve goes on
-   * (`solve.boundaryPanelsSplit`); so are a few interior faces (at most 8) left off planar where only
-   * folding would make them planar (`solve.interiorFacesSplit`). 'off': not.
+   * (`solve.boundaryPanelsSplit`); so are interior faces left off planar where only folding would make
+   * them planar (`solve.interiorFacesSplit`): a few (at most 8), or all of them where the solve stalled
+   * (up to 1 in 20 faces) or on a surface laid in several systems of rows (up to 1 in 10). 'off': not.
    */
   splitBoundary?: 'on' | 'off';
   /**
