@@ -526,6 +526,10 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
     for (int f : interiorOff) cut[f] = 1, ++interior;
     stalledRule = !seams && interiorOff.size() > fewOff;
   }
+  // An interior face crossing itself is cut whatever else is: the solve never unfolds it. (Next to a cut
+  // panel it was left whole: the uploaded cyclide at 122 faces kept a planar pentagon crossing itself.)
+  for (int f : interiorOff)
+    if (crossing[f] && !cut[f]) cut[f] = 1, ++interior;
   if (count + interior == 0) return {};
   std::vector<int> faces(r.hex.V.rows(), 0);  // faces at each vertex, cuts so far included
   for (int f = 0; f < r.hex.faceCount(); ++f)
@@ -608,6 +612,11 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     return dual;
   };
   // `dual` (of `duality`) into x.dual / x.initial, and the solve from it into x.hex / x.solve.
+  auto crossing = [](const PolyMesh& m) {
+    int n = 0;
+    for (int f = 0; f < m.faceCount(); ++f) n += faceSelfIntersects(m, f);
+    return n;
+  };
   bool stalledCuts = false;  // a solve reached the tolerance only through cuts its stall allowed
   auto solveFrom = [&](PipelineResult& x, Duality duality, DualMesh dual) {
     x.duality = duality;
@@ -628,7 +637,17 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
       x.boundaryPanelsSplit += cut.panels;
       x.interiorFacesSplit += cut.interior;
       stalledCuts = stalledCuts || cut.stalledRule;
-      if (!cut.resolve || round == last) break;
+      if (!cut.resolve || round == last) {
+        // The pieces of a face cut for crossing itself may cross themselves still (no diagonal of it left
+        // both simple): they are cut again, down to triangles at worst, which cannot.
+        for (int again = 0; again < 3 && crossing(x.hex) > 0; ++again) {
+          const PanelCut more = splitBoundaryPanels(x, po.tolerance, true, seams, false);
+          x.boundaryPanelsSplit += more.panels;
+          x.interiorFacesSplit += more.interior;
+          if (more.panels + more.interior == 0) break;
+        }
+        break;
+      }
       // Again from lambda = 1, now anchored at the positions reached (starting at the small lambda the first
       // solve ended with took as long on the uploaded wave roof at 10k faces, 12 iterations against 14).
       const PlanarizeReport first = x.solve;
@@ -642,11 +661,6 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
       if (h > 0) x.solve.displacementMax = (x.hex.V - x.initial.V).rowwise().norm().maxCoeff() / h;
     }
     clock.done("planarize");
-  };
-  auto crossing = [](const PolyMesh& m) {
-    int n = 0;
-    for (int f = 0; f < m.faceCount(); ++f) n += faceSelfIntersects(m, f);
-    return n;
   };
   const Duality asked = params.duality == Duality::Auto ? Duality::Dupin : params.duality;
   solveFrom(r, asked, dualOf(asked));

@@ -417,6 +417,19 @@ TEST_CASE("pipeline: a solve that stalls with more than a few interior faces off
   CHECK(cut.interiorFacesSplit <= cut.hex.faceCount() / 20);
 }
 
+TEST_CASE("pipeline: an interior face crossing itself next to a cut boundary panel is cut too") {
+  // The sampled cyclide at about 120 faces: a planar interior pentagon crossing itself touched a boundary
+  // panel that was cut, and was left whole (it was cut only where some face off planar lay away from the
+  // panels). Every face crossing itself is now cut, again where its pieces still cross.
+  PipelineParams p;
+  p.mesh = sampledUpload("cyclide", 30000);
+  p.faces = 122;
+  const PipelineResult r = runPipeline(p);
+  INFO("planarity " << r.metrics.planarityMax << ", cuts " << r.interiorFacesSplit << " + " << r.boundaryPanelsSplit);
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+}
+
 TEST_CASE("pipeline: rows ending on an uploaded mesh's boundary keep its P-Hex vertices on the mesh") {
   // The wave roof sampled by its lattice (60k vertices) has a zigzag boundary polyline along two of its sides:
   // every other lattice row ends half a lattice step short, about 0.2 cell at 10000 faces. Method 2's rows end
