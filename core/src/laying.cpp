@@ -94,6 +94,12 @@ const char* const kAsymptoticBase =
     "the base curve runs (almost) along an asymptotic direction, which is self-conjugate (§4.2, Prop. 5), so no "
     "triangle on it gives a valid star; choose a field further from the asymptotic directions (e.g. principal), the "
     "other base family, or the other method";
+// The same along the principal directions, which are never asymptotic off a parabolic curve: the chords of L0
+// turned onto one, the cell being coarse for how fast the curvature lines turn (a helicoid at 12 faces).
+const char* const kAsymptoticChord =
+    "a segment of the base curve runs (almost) along an asymptotic direction, which is self-conjugate (§4.2, "
+    "Prop. 5), so no triangle on it gives a valid star; the curvature lines are never asymptotic, but at this cell "
+    "the base curve's chords cut across their turn: ask for more faces (a smaller cell) or another start";
 
 std::string describe(const SurfaceWalker& walker, const SurfacePoint& p) {
   std::ostringstream s;
@@ -374,6 +380,11 @@ class Laying {
   std::optional<Crossing> crossCurve(const LocalGeometry& g, const FlowLine& ell, const std::vector<double>& ellArc,
                                      const Row& curve, int& hint) const;
   [[noreturn]] void cannotTile(const SurfacePoint& where, const std::string& why) const;
+  // Why L0 gives no valid triangle where it runs along an asymptotic direction (kAsymptoticBase, or for the
+  // principal field kAsymptoticChord).
+  const char* asymptoticWhy() const {
+    return field_.spec().kind == FieldKind::Principal ? kAsymptoticChord : kAsymptoticBase;
+  }
 
   const SurfaceWalker& walker_;
   const DirectionField& field_;
@@ -772,7 +783,7 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
       // On L0 the field runs along an asymptotic direction: no valid triangle anywhere along it. On a later
       // row a segment that left the field (a row end moved onto the boundary; on a helicoid of radius 3 at
       // 1150 faces, one at the tenth layer, which failed the whole lay) gets no apex, and its front splits.
-      if (fromL0) cannotTile(s.M, kAsymptoticBase);
+      if (fromL0) cannotTile(s.M, asymptoticWhy());
       if (!s.asymptotic && !asymptoticStops_++) firstAsymptoticStop_ = describe(walker_, s.M);  // (else counted)
       continue;
     }
@@ -1182,7 +1193,7 @@ void Laying::layLayer(std::size_t f, double stepScale) {
     // From L0 this is the field's doing: fail. Later, Method 1's rows have turned there (§5.2: their
     // orientation is not controlled): that front stops there.
     if (fronts_[f].layers == 0 && systems_ == 1)
-      cannotTile(segments.back().M, kAsymptoticBase);
+      cannotTile(segments.back().M, asymptoticWhy());
     if (!asymptoticStops_++) firstAsymptoticStop_ = describe(walker_, segments.back().M);
   }
   if (stepScale != 1)

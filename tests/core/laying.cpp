@@ -638,4 +638,16 @@ TEST_CASE("laying: a Method 2 row that leaves the field onto an asymptotic direc
     CHECK(e.code() == ErrorCode::CannotTile);
     CHECK(std::string(e.what()).find("asymptotic direction") != std::string::npos);
   }
+  // Along the principal directions, which are never asymptotic, only a coarse cell puts L0's chords on one:
+  // the message asks for a smaller cell instead of another field (the helicoid at 12 faces).
+  PipelineParams c;
+  c.surface = "helicoid";
+  c.faces = 12;
+  try {
+    runPipeline(c);
+    FAIL("no error");
+  } catch (const Error& e) {
+    CHECK(e.code() == ErrorCode::CannotTile);
+    CHECK(std::string(e.what()).find("smaller cell") != std::string::npos);
+  }
 }
