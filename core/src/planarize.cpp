@@ -16,6 +16,10 @@
 namespace phex {
 namespace {
 
+// The share of the surface-distance weight (mu) that also pulls a vertex along its tangent plane towards its
+// foot point (see moveVertex).
+constexpr double kTangentialPull = 0.1;
+
 void store(double* dst, const Vec3& v) { dst[0] = v.x(), dst[1] = v.y(), dst[2] = v.z(); }
 
 // Scaled volume of the tetrahedron (a, b, c, d): s * (b - a) . ((c - a) x (d - a)) / 6, with exact Jacobians.
@@ -301,8 +305,15 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
       g += (faceScale[f] * (offset[f] - normal[f].dot(xv))) * normal[f];
     }
     if (wm > 0) {
-      A += wm * feet[v].normal * feet[v].normal.transpose();
-      g += (wm * feet[v].normal.dot(feet[v].point - xv)) * feet[v].normal;
+      // F_d pulls the vertex onto the tangent plane at its foot, and with a tenth of that weight along the
+      // plane towards the foot itself. Onto the plane alone, a vertex whose face planes are nearly parallel
+      // to it (a boundary vertex, a parabolic one) is sent along their near-intersection, far from the
+      // surface: the wave roof at 1000 faces with mu = 0.01 ended 21 % of its diagonal off, vertices
+      // 12 edges from their start.
+      const Eigen::Matrix3d P = feet[v].normal * feet[v].normal.transpose();
+      const Eigen::Matrix3d W = wm * (P + kTangentialPull * (Eigen::Matrix3d::Identity() - P));
+      A += W;
+      g += W * (feet[v].point - xv);
     }
     // Where the planes leave a direction free (λ → 0 at a parabolic vertex) the vertex keeps its place
     // along it: solve for the displacement with a tiny relative Tikhonov term.
