@@ -586,6 +586,19 @@ TEST_CASE("laying: where rows end on the boundary of an elliptic patch, the star
   CHECK(hasNote(t.triangulation, "row ends moved onto the boundary"));
 }
 
+// Runs `fn`, which must throw Error(CannotTile) whose message contains `text`.
+template <class Fn>
+void checkCannotTile(Fn&& fn, const std::string& text) {
+  try {
+    fn();
+    FAIL("no error");
+  } catch (const Error& e) {
+    CHECK(e.code() == ErrorCode::CannotTile);
+    INFO(e.what());
+    CHECK(std::string(e.what()).find(text) != std::string::npos);
+  }
+}
+
 TEST_CASE("laying: layers that run over each other stop with an error instead of going on to maxLayers") {
   // Method 1 along the principal directions of a cone (a developable: the step is re-used on every layer),
   // rows along the circles: one front circled on over laid triangles, 16k vertices where 700 fit, and would
@@ -594,14 +607,7 @@ TEST_CASE("laying: layers that run over each other stop with an error instead of
   LayingOptions o = options(0.19221591581912195);
   o.start = Vec3(0, 0, 1.235150366965118);
   o.base = BaseFamily::Conjugate;
-  try {
-    const Triangulation t = layTriangulation(*s, o);
-    INFO("laid " << t.mesh.V.rows() << " vertices");
-    FAIL("no error");
-  } catch (const Error& e) {
-    CHECK(e.code() == ErrorCode::CannotTile);
-    CHECK(std::string(e.what()).find("ran over each other") != std::string::npos);
-  }
+  checkCannotTile([&] { layTriangulation(*s, o); }, "ran over each other");
   // The pipeline, whose start trials met this lay, goes on from the other start and finishes.
   PipelineParams p;
   p.surface = "cone";
@@ -631,23 +637,11 @@ TEST_CASE("laying: a Method 2 row that leaves the field onto an asymptotic direc
   q.surfaceParams = {{"size", 2.61}, {"bend", 0.7252}};
   q.field = "angle:-46";
   q.faces = 1765;
-  try {
-    runPipeline(q);
-    FAIL("no error");
-  } catch (const Error& e) {
-    CHECK(e.code() == ErrorCode::CannotTile);
-    CHECK(std::string(e.what()).find("asymptotic direction") != std::string::npos);
-  }
+  checkCannotTile([&] { runPipeline(q); }, "asymptotic direction");
   // Along the principal directions, which are never asymptotic, only a coarse cell puts L0's chords on one:
   // the message asks for a smaller cell instead of another field (the helicoid at 12 faces).
   PipelineParams c;
   c.surface = "helicoid";
   c.faces = 12;
-  try {
-    runPipeline(c);
-    FAIL("no error");
-  } catch (const Error& e) {
-    CHECK(e.code() == ErrorCode::CannotTile);
-    CHECK(std::string(e.what()).find("smaller cell") != std::string::npos);
-  }
+  checkCannotTile([&] { runPipeline(c); }, "smaller cell");
 }
