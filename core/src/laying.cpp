@@ -304,9 +304,12 @@ class PointGrid {
 // hold about three times the estimate, and the uploaded wave roof's ideal triangles 1.8 times.
 constexpr double kVertexExcess = 10;
 constexpr double kVertexSlack = 5000;
+// Whether surfaceArea knows the surface's area (a mesh or a parametric surface).
+bool areaKnown(const Surface& surface) {
+  return dynamic_cast<const MeshSurface*>(&surface) || dynamic_cast<const ParametricSurface*>(&surface);
+}
 std::size_t vertexLimit(const Surface& surface, double cell) {
-  const bool known = dynamic_cast<const MeshSurface*>(&surface) || dynamic_cast<const ParametricSurface*>(&surface);
-  const double area = known ? surfaceArea(surface) : surface.bounds().diagonal().squaredNorm();
+  const double area = areaKnown(surface) ? surfaceArea(surface) : surface.bounds().diagonal().squaredNorm();
   const double expected = area / (std::sqrt(3.0) / 2 * cell * cell);
   return static_cast<std::size_t>(std::min(kVertexExcess * expected + kVertexSlack, 2e9));
 }
@@ -314,7 +317,7 @@ std::size_t vertexLimit(const Surface& surface, double cell) {
 // Passes of Method 1's (1, 2, 1) / 4 smoothing per layer at `cell`: one at about kSmoothingFaces faces, and
 // growing as 1 / cell. A Surface other than a mesh or a parametric one (whose area is not known) gets one.
 int progressiveSmoothingPasses(const Surface& surface, double cell) {
-  if (!dynamic_cast<const MeshSurface*>(&surface) && !dynamic_cast<const ParametricSurface*>(&surface)) return 1;
+  if (!areaKnown(surface)) return 1;
   const double passes = cellForFaceCount(surface, kSmoothingFaces) / cell;
   return static_cast<int>(std::clamp(std::lround(passes), 1L, 64L));
 }
@@ -1587,15 +1590,13 @@ int Laying::fillGaps() {
   std::unordered_set<std::int64_t> open;  // the directed edges without their reverse
   std::vector<std::vector<int>> incident(nv);
   std::vector<char> used(nv, 0);
-  // Passes are stamped; a vertex keeps the stamp of the pass that last gave it a triangle, and an edge that found
-  // no triangle in a pass is looked at again only once a vertex near it has changed since.
+  // Passes are stamped, and an edge that found no triangle in a pass is looked at again only once a vertex near
+  // it has changed since. Each grid cell keeps the stamp of the pass that last gave one of its vertices a
+  // triangle (or put a vertex there): whether a vertex near an edge changed is then a look at the cells around
+  // it, not at every vertex in them. `cellOfVertex`: the grid cell of each vertex in it (-1: none).
   int stamp = 0;
-  std::vector<int> touched(nv, 0);
-  // The grid cell of each vertex in it (-1: none), and per cell the latest stamp of its vertices: whether a
-  // vertex near an edge changed is then a look at the cells around it, not at every vertex in them.
   std::vector<int> cellOfVertex(nv, -1), cellStamp;
   auto touch = [&](int v) {
-    touched[v] = stamp;
     if (cellOfVertex[v] >= 0) cellStamp[cellOfVertex[v]] = stamp;  // stamps only grow
   };
   auto addEdges = [&](int t) {
@@ -1622,7 +1623,7 @@ int Laying::fillGaps() {
     const int cell = grid.insert(v, vertices_[v].point());
     cellOfVertex[v] = cell;
     if (cell >= static_cast<int>(cellStamp.size())) cellStamp.resize(cell + 1, 0);
-    cellStamp[cell] = std::max(cellStamp[cell], touched[v]);
+    cellStamp[cell] = std::max(cellStamp[cell], stamp);
   };
   for (int v = 0; v < nv; ++v)
     if (used[v]) gridInsert(v);
@@ -1794,7 +1795,6 @@ int Laying::fillGaps() {
         vertices_.push_back(p);
         incident.emplace_back();
         used.push_back(0);
-        touched.push_back(stamp);
         cellOfVertex.push_back(-1);
         double sine = 0;
         const bool fits = admissible(a, b, q, sine);
@@ -1802,7 +1802,6 @@ int Laying::fillGaps() {
         if (!fits) {
           incident.pop_back();
           used.pop_back();
-          touched.pop_back();
           cellOfVertex.pop_back();
           continue;
         }

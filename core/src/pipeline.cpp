@@ -617,8 +617,9 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     for (int f = 0; f < m.faceCount(); ++f) n += faceSelfIntersects(m, f);
     return n;
   };
-  bool stalledCuts = false;  // a solve reached the tolerance only through cuts its stall allowed
+  // Returns whether interior faces were cut only because a solve stalled (kStalledShare).
   auto solveFrom = [&](PipelineResult& x, Duality duality, DualMesh dual) {
+    bool stalledCuts = false;
     x.duality = duality;
     x.dual = std::move(dual);
     x.initial = x.dual.mesh;
@@ -629,11 +630,11 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     // cut in two and the solve goes on from there (twice at most, four times on a surface of several
     // systems); after the last solve, panels it left crossing themselves are cut once more.
     int lastSolve = x.solve.iterations;  // iterations of the latest solve alone
-    const bool stalledFirst = !x.solve.converged && lastSolve < po.maxIterations;
-    const int last = seams || stalledFirst ? kSeamRounds : 2;
+    // Stopped short of the tolerance before its iteration cap.
+    auto stalled = [&] { return !x.solve.converged && lastSolve < po.maxIterations; };
+    const int last = seams || stalled() ? kSeamRounds : 2;
     for (int round = 0; round <= last && params.splitBoundaryPanels; ++round) {
-      const bool stalled = !x.solve.converged && lastSolve < po.maxIterations;
-      const PanelCut cut = splitBoundaryPanels(x, po.tolerance, round == last, seams, stalled);
+      const PanelCut cut = splitBoundaryPanels(x, po.tolerance, round == last, seams, stalled());
       x.boundaryPanelsSplit += cut.panels;
       x.interiorFacesSplit += cut.interior;
       stalledCuts = stalledCuts || cut.stalledRule;
@@ -661,10 +662,10 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
       if (h > 0) x.solve.displacementMax = (x.hex.V - x.initial.V).rowwise().norm().maxCoeff() / h;
     }
     clock.done("planarize");
+    return stalledCuts;
   };
   const Duality asked = params.duality == Duality::Auto ? Duality::Dupin : params.duality;
-  solveFrom(r, asked, dualOf(asked));
-  const bool dupinStalled = stalledCuts;
+  const bool dupinStalled = solveFrom(r, asked, dualOf(asked));
   // Where the solve from the Dupin dual stalls short of the tolerance or leaves faces crossing themselves,
   // the tangent dual (§4.1) is tried as well: its faces lie in the tangent planes at their vertices, so on
   // a triangulation along a conjugate network it is planar as it stands (the cyclide's lattice at 3000 to
