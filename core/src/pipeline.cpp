@@ -162,6 +162,9 @@ TriangulationMethod resolveMethod(const PipelineParams& params) {
 
 namespace {
 
+// How far (as a ratio) a lay's vertex count may miss the faces asked for before it is laid again.
+constexpr double kCount = 1.1;
+
 // Where L0 should start, and along which family, when the caller did not say. The middle of the bounds,
 // projected, suits a patch; on a ring (torus, cyclide, their meshes) it lands on the inner side, where rows
 // along the parallels must be resampled as they grow and cross the parabolic circles badly. So a few
@@ -338,7 +341,10 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       lo.baseDirection = params.direction;
       StartChoice choice;
       if (!lo.start) {
-        choice = chooseStart(*t.surface, lo, params.faces, cancel);
+        // With a cell given, the trial lays are sized by the faces that cell gives (about), not by the
+        // default face count: a fine cell on an uploaded mesh had its trials laid at half its full size.
+        const int faces = params.cell > 0 ? int(std::lround(std::pow(cellForFaceCount(*t.surface, 1) / cell, 2))) : params.faces;
+        choice = chooseStart(*t.surface, lo, faces, cancel);
         lo.start = choice.start;
         lo.base = choice.base;
       }
@@ -352,7 +358,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       // If that cell cannot be laid, the area estimate's is, as without the trial. Only for an uploaded mesh,
       // whose lays are the slowest (closest points on the mesh); an analytic surface keeps the area estimate.
       bool fromTrial = params.mesh && params.cell == 0 && trialVertices > 0 && trialCell > cell &&
-                       std::abs(std::log(trialVertices * trialCell * trialCell / (cell * cell) / params.faces)) > std::log(1.1);
+                       std::abs(std::log(trialVertices * trialCell * trialCell / (cell * cell) / params.faces)) > std::log(kCount);
       if (fromTrial) {
         lo.cell = std::clamp(trialCell * std::sqrt(trialVertices / params.faces), 0.5 * cell, 2 * cell);
         if (std::pow(cellForFaceCount(*t.surface, 1) / lo.cell, 2) > kMaxFaces) lo.cell = cell;
@@ -373,7 +379,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
         return std::abs(std::log(double(std::max<Eigen::Index>(tr.mesh.V.rows(), 1)) / params.faces));
       };
       double cells[3] = {lo.cell, 0, 0}, counts[3] = {double(t.triangulation.mesh.V.rows()), 0, 0};
-      for (int attempt = 1; attempt < 3 && params.cell == 0 && miss(t.triangulation) > std::log(1.1); ++attempt) {
+      for (int attempt = 1; attempt < 3 && params.cell == 0 && miss(t.triangulation) > std::log(kCount); ++attempt) {
         double exponent = 2;  // vertices ~ cell^-2 on a fully covered surface
         if (attempt == 2 && counts[1] > 0 && counts[0] > 0 && std::abs(std::log(cells[1] / cells[0])) > 1e-3)
           exponent = std::clamp(-std::log(counts[1] / counts[0]) / std::log(cells[1] / cells[0]), 0.5, 4.0);

@@ -193,6 +193,28 @@ TEST_CASE("pipeline: the start point and laying direction can be set, and are ch
   CHECK_THROWS_WITH(triangulate(p), Catch::Contains("direction"));
 }
 
+TEST_CASE("pipeline: with a cell given, the start's trial lays are sized by that cell, not by the default count") {
+  // A coarse cell (800 vertices laid) with the face count left at its default (2000): the trials are laid at
+  // about half the size the cell gives by the area estimate (146 faces), not at 1000 faces (lays bigger than
+  // the one asked for; on the uploaded bumps at cell 0.0101 they took 59 % of the run).
+  PipelineParams p;
+  p.surface = "torus";
+  p.method = TriangulationMethod::Prespecified;
+  p.cell = 0.25;
+  const TriangulationStage t = triangulate(p);
+  REQUIRE(!t.triangulation.notes.empty());
+  const std::string& note = t.triangulation.notes.front();
+  INFO(note);
+  const std::string key = "trial lays at about ";
+  const std::size_t at = note.find(key);
+  REQUIRE(at != std::string::npos);
+  const int trialFaces = std::stoi(note.substr(at + key.size()));
+  const Eigen::Index laid = t.triangulation.mesh.V.rows();
+  INFO("laid " << laid << " vertices");
+  CHECK(trialFaces >= 50);
+  CHECK(trialFaces < 0.5 * laid);
+}
+
 TEST_CASE("pipeline: on a surface laid in several systems, every face only folding would make planar is cut") {
   // The bumps at 1000 faces: along the seams and where rows run along the parabolic rings, some 30 interior
   // faces stall off planar (the solve stopped at planarity 1e-3 before); each is cut along its best diagonal,
