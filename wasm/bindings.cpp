@@ -206,6 +206,7 @@ val resultToJs(const phex::PipelineResult& r) {
   solve.set("interiorFacesSplit", r.interiorFacesSplit);
   solve.set("surfaceDistanceBefore", r.solve.surfaceDistanceBefore);
   solve.set("surfaceDistanceAfter", r.solve.surfaceDistanceAfter);
+  solve.set("freeNodesSettled", r.solve.freeNodesSettled);
   val log = val::array();
   for (const phex::IterationLog& it : r.solve.log) {
     val e = val::object();

@@ -64,7 +64,9 @@ Options of `phex run`:
   --folds prevent|allow     the local solver keeps simple faces simple (default; where only folding
                             reaches planarity it stops short and says so) or lets them fold
   --surface-fit on|off      once planar, shift every face plane along its normal (the faces stay
-                            exactly planar) to bring the vertices closer to the surface (default on)
+                            exactly planar) to bring the vertices closer to the surface, and put
+                            nodes on fewer than three face planes nearest to it along the directions
+                            those planes leave free (default on)
   --split-boundary on|off   a boundary panel left off planar (every face away from it planar), or one
                             that crosses itself, is cut in two along its best diagonal and the solve
                             goes on; so are up to 8 interior faces left off planar, or all of
@@ -201,7 +203,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                       {"boundaryPanelsSplit", r.boundaryPanelsSplit}, {"interiorFacesSplit", r.interiorFacesSplit},
                       {"log", log}}},
           {"surfaceFit", {{"applied", r.solve.surfaceFitted}, {"distanceBefore", r.solve.surfaceDistanceBefore},
-                          {"distanceAfter", r.solve.surfaceDistanceAfter}}},
+                          {"distanceAfter", r.solve.surfaceDistanceAfter}, {"freeNodesSettled", r.solve.freeNodesSettled}}},
           {"milliseconds", timings},
           {"peakMemoryMB", peakMemoryMB()}};
 }

@@ -88,3 +88,27 @@ TEST_CASE("duality: Dupin dual faces crossing themselves across a parabolic curv
   for (int f = 0; f < d.mesh.faceCount(); ++f)
     for (int k = 0; k < d.mesh.faceSize(f); ++k) REQUIRE(d.mesh.face(f)[k] == raw.mesh.face(f)[k]);
 }
+
+TEST_CASE("duality: a boundary triangle's dual point beyond its boundary edge is moved back onto the edge") {
+  // An obtuse triangle on the sphere, its obtuse corner opposite the boundary edge AB: its tangent planes meet
+  // above its circumcentre, beyond AB, which would put a node off the surface, past its boundary.
+  const ParametricSurfacePtr s = makeSurface("sphere");
+  Triangulation t;
+  t.mesh.V.resize(3, 3);
+  const Vec3 a = Vec3(1, -0.2, 0).normalized(), b = Vec3(1, 0.2, 0).normalized(), c = Vec3(1, 0, 0.08).normalized();
+  t.mesh.V << a.transpose(), b.transpose(), c.transpose();
+  t.mesh.F.resize(1, 3);
+  t.mesh.F << 0, 1, 2;
+  for (const DualMesh& d : {tangentDual(t, *s), dupinDual(t, *s)}) {
+    int point = -1;  // the triangle's dual point
+    for (int v = 0; v < d.mesh.V.rows(); ++v)
+      if (d.vertexTriangle[v] == 0) point = v;
+    REQUIRE(point >= 0);
+    const Vec3 x = d.mesh.vertex(point);
+    const Vec3 e = (b - a).normalized();
+    const Vec3 in = ((c - a) - e * e.dot(c - a)).normalized();  // across AB, towards C
+    // The planes meet some 0.2 beyond AB (within the 0.75 longest edges of the centroid that a dual point
+    // may be); the point is on AB's line now, not past it.
+    CHECK(std::abs(in.dot(x - a)) < 1e-9);
+  }
+}

@@ -6,6 +6,7 @@
 #include "phex/duality.hpp"
 #include "phex/pipeline.hpp"
 #include "phex/planarize.hpp"
+#include "phex/surfaces.hpp"
 
 using namespace phex;
 
@@ -139,4 +140,33 @@ TEST_CASE("planarize: the surface-distance weight mu keeps nodes near the surfac
   CHECK(r.metrics.surfaceDistanceMax < 0.002);
   CHECK(r.metrics.selfIntersectingCount == 0);
   CHECK(r.metrics.planarityMax < r.solve.initialPlanarityMax);
+}
+
+TEST_CASE("planarize: a node on fewer than three face planes is put nearest the surface along its free directions") {
+  // A quad in the tangent plane x = 1 of the unit sphere, one corner far out (0.22 off the sphere): each
+  // corner lies on one plane only, so it may move within that plane without the quad leaving it.
+  const ParametricSurfacePtr sphere = makeSurface("sphere");
+  PolyMesh quad;
+  quad.V.resize(4, 3);
+  quad.V << 1, -0.1, -0.1, 1, 0.1, -0.1, 1, 0.5, 0.5, 1, -0.1, 0.1;
+  quad.addFace({0, 1, 2, 3});
+  const double before = measure(quad, *sphere).surfaceDistanceMax;
+  PlanarizeOptions o;
+  o.surface = sphere.get();
+  PolyMesh settled = quad;
+  const PlanarizeReport r = planarize(settled, o);
+  const MeshMetrics m = measure(settled, *sphere);
+  CHECK(r.freeNodesSettled >= 1);
+  CHECK(m.planarityMax <= 1e-12);
+  CHECK(m.selfIntersectingCount == 0);
+  CHECK(m.surfaceDistanceMax < 0.5 * before);
+  CHECK(r.surfaceDistanceAfter == Approx(m.surfaceDistanceMax).margin(1e-12));
+  // The far corner came in towards the others, and stayed in the quad's plane.
+  CHECK((settled.vertex(2) - settled.vertex(0)).norm() < (quad.vertex(2) - quad.vertex(0)).norm());
+  // Without the surface fit nothing moves.
+  o.fitSurface = false;
+  PolyMesh plain = quad;
+  const PlanarizeReport off = planarize(plain, o);
+  CHECK(off.freeNodesSettled == 0);
+  CHECK(plain.V == quad.V);
 }

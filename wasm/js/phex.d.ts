@@ -169,6 +169,11 @@ export interface SolveReport {
   /** Largest node distance to the surface over its bounding-box diagonal, before and after that shift. */
   surfaceDistanceBefore: number;
   surfaceDistanceAfter: number;
+  /**
+   * Nodes on fewer than three face planes (at the boundary, or among the triangles of cuts) then put nearest
+   * to the surface along the directions those planes leave free: the faces stay exactly as planar.
+   */
+  freeNodesSettled: number;
   log: IterationLog[];
 }
 
@@ -273,7 +278,9 @@ export interface RunParams {
   /**
    * 'on' (default): once planar, every face plane is shifted along its normal (each node following to the
    * intersection of its planes, so faces stay exactly planar) to bring the nodes closer to the surface;
-   * kept only where the largest distance drops without folding a face (`solve.surfaceFitted`). 'off': not.
+   * kept only where the largest distance drops without folding a face (`solve.surfaceFitted`); then nodes on
+   * fewer than three face planes are put nearest to the surface along the directions those planes leave free
+   * (`solve.freeNodesSettled`). 'off': neither.
    */
   surfaceFit?: 'on' | 'off';
   /**

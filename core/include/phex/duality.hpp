@@ -10,7 +10,9 @@ namespace phex {
 
 // The dual polygon mesh of a triangulation: one face per triangulation vertex. Faces around boundary vertices
 // are closed with points on the boundary edges (and the vertex itself at boundary corners), so the mesh has a
-// clean border of planar polygons.
+// clean border of planar polygons. In both dualities a boundary triangle whose dual point would lie beyond its
+// boundary edge (an obtuse or skinny one) has it moved back onto the edge's line, in the triangle's plane, so
+// no node starts off the surface past its border; the solve makes those faces planar again.
 struct DualMesh {
   PolyMesh mesh;
   std::vector<int> faceVertex;      // #faces: the triangulation vertex each face is dual to

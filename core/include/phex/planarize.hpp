@@ -67,6 +67,9 @@ struct PlanarizeReport {
   bool surfaceFitted = false;
   double surfaceDistanceBefore = 0.0;
   double surfaceDistanceAfter = 0.0;
+  // Nodes on fewer than three face planes then put nearest to the surface along the directions those planes
+  // leave free (part of fitSurface; the faces stay exactly as planar).
+  int freeNodesSettled = 0;
   std::vector<IterationLog> log;
 };
 
