@@ -656,79 +656,103 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
     return count;
   };
   fit.before = footPoints();
-  const int foldedBefore = selfIntersecting();
+  std::vector<char> foldedAtStart(nf, 0);
+  for (int f = 0; f < nf; ++f) foldedAtStart[f] = faceSelfIntersects(mesh, f, normal[f]);
+  const int foldedBefore = static_cast<int>(std::count(foldedAtStart.begin(), foldedAtStart.end(), 1));
   const double tangential = 0.1, shift = 1e-3;  // weights relative to the normal distance
   const double wt = std::sqrt(tangential), ws = std::sqrt(shift);
-  Eigen::VectorXd delta = Eigen::VectorXd::Zero(nf);
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(9 * static_cast<std::size_t>(nv) + nf);
-  double distance = fit.before;
   constexpr int kRounds = 2;
-  // Round 1 minimizes the sum of squared distances; the next ones reweight each vertex by its squared
-  // distance over the mean square (at least 1), leaning towards the largest distance, which is what
-  // the report gives. The best placement by largest distance is kept.
-  std::vector<double> weight(nv, 1.0);
-  Eigen::VectorXd best = delta;
-  double bestDistance = fit.before;
-  for (int round = 0; round < kRounds; ++round) {
-    checkCancel(cancel);
-    // The normal equations JᵀJ δ = −Jᵀr, assembled vertex by vertex: a vertex's three residuals (its
-    // weighted distance along n and its tangential drift) involve only the shifts of its own faces.
-    triplets.clear();
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nf);
-    for (int v = 0; v < nv; ++v) {
-      const int k0 = start[v], k = start[v + 1] - k0;
-      if (k == 0) continue;
-      const Vec3 x = mesh.vertex(v);
-      // The distance's own gradient: along the surface normal where the closest point is inside the
-      // surface, towards the boundary curve where the vertex lies beyond it (boundary panels).
-      const Vec3 away = x - feet[v].point;
-      const double gap = away.norm();
-      const Vec3 n = gap > 1e-12 * h && std::abs(feet[v].normal.dot(away)) < 0.9 * gap ? Vec3(away / gap) : feet[v].normal;
-      const Vec3 t1 = n.unitOrthogonal(), t2 = n.cross(t1);
-      const Vec3 drift = x - x0.row(v).transpose();
-      const double wv = std::sqrt(weight[v]);
-      const Vec3 residual(wv * n.dot(away) / h, wt * t1.dot(drift) / h, wt * t2.dot(drift) / h);
-      Vec3 column[3];
-      for (int i = 0; i < k && i < 3; ++i) {
-        const Vec3& g = G[k0 + i];
-        column[i] = Vec3(wv * n.dot(g), wt * t1.dot(g), wt * t2.dot(g));
-        rhs[faces[k0 + i]] -= column[i].dot(residual);
+  // Where the shifts fold faces, the faces at those faces' corners are frozen and the shifts are solved
+  // again, up to kRefreezes times: the vase at 1000 and 1200 faces folded 3-4 faces next to its parabolic
+  // circle, and the whole fit was dropped (0.34 % of the diagonal left where 0.06 % was within reach).
+  constexpr int kRefreezes = 2;
+  for (int attempt = 0;; ++attempt) {
+    if (attempt > 0) {
+      mesh.V = x0;
+      footPoints();
+    }
+    Eigen::VectorXd delta = Eigen::VectorXd::Zero(nf);
+    double distance = fit.before;
+    // Round 1 minimizes the sum of squared distances; the next ones reweight each vertex by its squared
+    // distance over the mean square (at least 1), leaning towards the largest distance, which is what
+    // the report gives. The best placement by largest distance is kept.
+    std::vector<double> weight(nv, 1.0);
+    Eigen::VectorXd best = delta;
+    double bestDistance = fit.before;
+    for (int round = 0; round < kRounds; ++round) {
+      checkCancel(cancel);
+      // The normal equations JᵀJ δ = −Jᵀr, assembled vertex by vertex: a vertex's three residuals (its
+      // weighted distance along n and its tangential drift) involve only the shifts of its own faces.
+      triplets.clear();
+      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nf);
+      for (int v = 0; v < nv; ++v) {
+        const int k0 = start[v], k = start[v + 1] - k0;
+        if (k == 0) continue;
+        const Vec3 x = mesh.vertex(v);
+        // The distance's own gradient: along the surface normal where the closest point is inside the
+        // surface, towards the boundary curve where the vertex lies beyond it (boundary panels).
+        const Vec3 away = x - feet[v].point;
+        const double gap = away.norm();
+        const Vec3 n = gap > 1e-12 * h && std::abs(feet[v].normal.dot(away)) < 0.9 * gap ? Vec3(away / gap) : feet[v].normal;
+        const Vec3 t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+        const Vec3 drift = x - x0.row(v).transpose();
+        const double wv = std::sqrt(weight[v]);
+        const Vec3 residual(wv * n.dot(away) / h, wt * t1.dot(drift) / h, wt * t2.dot(drift) / h);
+        Vec3 column[3];
+        for (int i = 0; i < k && i < 3; ++i) {
+          const Vec3& g = G[k0 + i];
+          column[i] = Vec3(wv * n.dot(g), wt * t1.dot(g), wt * t2.dot(g));
+          rhs[faces[k0 + i]] -= column[i].dot(residual);
+        }
+        for (int i = 0; i < k && i < 3; ++i)
+          for (int j = 0; j < k && j < 3; ++j) triplets.emplace_back(faces[k0 + i], faces[k0 + j], column[i].dot(column[j]));
       }
-      for (int i = 0; i < k && i < 3; ++i)
-        for (int j = 0; j < k && j < 3; ++j) triplets.emplace_back(faces[k0 + i], faces[k0 + j], column[i].dot(column[j]));
+      for (int f = 0; f < nf; ++f) {
+        const double wf = frozen[f] ? 1.0 : ws;
+        triplets.emplace_back(f, f, wf * wf);
+        rhs[f] -= wf * ws * delta[f];
+      }
+      Eigen::SparseMatrix<double> JtJ(nf, nf);
+      JtJ.setFromTriplets(triplets.begin(), triplets.end());
+      Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg(JtJ);
+      // Tight enough that where the iterations stop (which round-off can shift by one between native code
+      // and WebAssembly) moves no vertex by more than round-off.
+      cg.setTolerance(1e-6);
+      cg.setMaxIterations(300);
+      Eigen::VectorXd step = cg.solve(rhs);
+      if (!step.allFinite()) break;
+      for (int f = 0; f < nf; ++f)
+        if (frozen[f]) step[f] = 0;
+      delta += step;
+      place(delta);
+      distance = footPoints();
+      if (distance < bestDistance) best = delta, bestDistance = distance;
+      double meanSquare = 0;
+      for (int v = 0; v < nv; ++v) meanSquare += (feet[v].point - mesh.vertex(v)).squaredNorm() / nv;
+      for (int v = 0; v < nv; ++v)
+        weight[v] = meanSquare > 0 ? std::clamp((feet[v].point - mesh.vertex(v)).squaredNorm() / meanSquare, 1.0, 1e4) : 1.0;
     }
+    place(best);
+    distance = bestDistance;
+    if (!(distance < fit.before)) break;
+    if (selfIntersecting() <= foldedBefore) {
+      fit.applied = true;
+      fit.after = distance;
+      return fit;
+    }
+    if (attempt == kRefreezes) break;
     for (int f = 0; f < nf; ++f) {
-      const double wf = frozen[f] ? 1.0 : ws;
-      triplets.emplace_back(f, f, wf * wf);
-      rhs[f] -= wf * ws * delta[f];
+      if (foldedAtStart[f] || !faceSelfIntersects(mesh, f, normal[f])) continue;
+      frozen[f] = 1;  // first the folded faces alone, then also the faces at their corners
+      if (attempt > 0)
+        for (int i = 0; i < mesh.faceSize(f); ++i)
+          for (int v = mesh.face(f)[i], k = start[v]; k < start[v + 1]; ++k) frozen[faces[k]] = 1;
     }
-    Eigen::SparseMatrix<double> JtJ(nf, nf);
-    JtJ.setFromTriplets(triplets.begin(), triplets.end());
-    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg(JtJ);
-    // Tight enough that where the iterations stop (which round-off can shift by one between native code
-    // and WebAssembly) moves no vertex by more than round-off.
-    cg.setTolerance(1e-6);
-    cg.setMaxIterations(300);
-    Eigen::VectorXd step = cg.solve(rhs);
-    if (!step.allFinite()) break;
-    for (int f = 0; f < nf; ++f)
-      if (frozen[f]) step[f] = 0;
-    delta += step;
-    place(delta);
-    distance = footPoints();
-    if (distance < bestDistance) best = delta, bestDistance = distance;
-    double meanSquare = 0;
-    for (int v = 0; v < nv; ++v) meanSquare += (feet[v].point - mesh.vertex(v)).squaredNorm() / nv;
     for (int v = 0; v < nv; ++v)
-      weight[v] = meanSquare > 0 ? std::clamp((feet[v].point - mesh.vertex(v)).squaredNorm() / meanSquare, 1.0, 1e4) : 1.0;
-  }
-  place(best);
-  distance = bestDistance;
-  if (distance < fit.before && selfIntersecting() <= foldedBefore) {
-    fit.applied = true;
-    fit.after = distance;
-    return fit;
+      for (int k = start[v]; k < start[v + 1]; ++k)
+        if (frozen[faces[k]]) G[k].setZero();
   }
   mesh.V = x0;
   fit.after = fit.before;
