@@ -298,40 +298,51 @@ int trimBoundarySlivers(Triangulation& triangulation, double ratio) {
 
 int openInvalidBoundaryStars(Triangulation& triangulation, const Surface& surface) {
   TriMesh& T = triangulation.mesh;
-  const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
-  if (nf == 0) return 0;
-  const VertexRings rings = vertexRings(T);
-  const std::vector<LocalGeometry> geo = vertexGeometry(triangulation, surface);
-  const std::vector<char> judged = judgedStars(T, rings, geo, T.meanEdgeLength());
-  std::vector<char> drop(nf, 0), touched(nv, 0);
-  int dropped = 0;
-  for (int v = 0; v < nv; ++v) {
-    if (!judged[v] || touched[v]) continue;
-    bool valid = true;
-    int candidate = -1, failingCandidate = -1;
-    for (int f : rings.triangles[v]) {
-      int k = 0;
-      while (T.F(f, k) != v) ++k;
-      const int b = T.F(f, (k + 1) % 3), c = T.F(f, (k + 2) % 3);
-      const Triangle2 tri = {Vec2(0, 0), toTangentPlane(geo[v], T.V.row(b).transpose()),
-                             toTangentPlane(geo[v], T.V.row(c).transpose())};
-      const bool ok = starIsValid(geo[v], tri);
-      valid = valid && ok;
-      // b -> c is a boundary edge: f is the first triangle of b's fan, whose boundary edge runs to the next corner.
-      const bool droppable = !rings.closed[b] && rings.triangles[b].front() == f && !drop[f] && !touched[b] &&
-                             !touched[c] && rings.triangles[b].size() >= 2 && rings.triangles[c].size() >= 2;
-      if (!droppable) continue;
-      if (candidate < 0) candidate = f;
-      if (!ok && failingCandidate < 0) failingCandidate = f;
+  // One pass drops at most one triangle per corner; neighbouring stars next to the boundary (the cyclide
+  // patch by Method 1: two, side by side) need another pass once the first has opened one of them.
+  auto pass = [&]() {
+    const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
+    if (nf == 0) return 0;
+    const VertexRings rings = vertexRings(T);
+    const std::vector<LocalGeometry> geo = vertexGeometry(triangulation, surface);
+    const std::vector<char> judged = judgedStars(T, rings, geo, T.meanEdgeLength());
+    std::vector<char> drop(nf, 0), touched(nv, 0);
+    int dropped = 0;
+    for (int v = 0; v < nv; ++v) {
+      if (!judged[v] || touched[v]) continue;
+      bool valid = true;
+      int candidate = -1, failingCandidate = -1;
+      for (int f : rings.triangles[v]) {
+        int k = 0;
+        while (T.F(f, k) != v) ++k;
+        const int b = T.F(f, (k + 1) % 3), c = T.F(f, (k + 2) % 3);
+        const Triangle2 tri = {Vec2(0, 0), toTangentPlane(geo[v], T.V.row(b).transpose()),
+                               toTangentPlane(geo[v], T.V.row(c).transpose())};
+        const bool ok = starIsValid(geo[v], tri);
+        valid = valid && ok;
+        // b -> c is a boundary edge: f is the first triangle of b's fan, whose boundary edge runs to the next corner.
+        const bool droppable = !rings.closed[b] && rings.triangles[b].front() == f && !drop[f] && !touched[b] &&
+                               !touched[c] && rings.triangles[b].size() >= 2 && rings.triangles[c].size() >= 2;
+        if (!droppable) continue;
+        if (candidate < 0) candidate = f;
+        if (!ok && failingCandidate < 0) failingCandidate = f;
+      }
+      if (valid || candidate < 0) continue;
+      const int f = failingCandidate >= 0 ? failingCandidate : candidate;
+      drop[f] = 1;
+      for (int k = 0; k < 3; ++k) touched[T.F(f, k)] = 1;
+      ++dropped;
     }
-    if (valid || candidate < 0) continue;
-    const int f = failingCandidate >= 0 ? failingCandidate : candidate;
-    drop[f] = 1;
-    for (int k = 0; k < 3; ++k) touched[T.F(f, k)] = 1;
-    ++dropped;
+    if (dropped > 0) keepUndropped(T, drop, dropped);
+    return dropped;
+  };
+  int dropped = 0;
+  for (int round = 0; round < 3; ++round) {
+    const int n = pass();
+    dropped += n;
+    if (n == 0) break;
   }
   if (dropped == 0) return 0;
-  keepUndropped(T, drop, dropped);
   triangulation.notes.push_back(std::to_string(dropped) + " triangles dropped along the boundary where they closed an "
                                 "invalid star (Props 4, 5) of a vertex next to it");
   return dropped;
