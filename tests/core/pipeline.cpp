@@ -232,7 +232,9 @@ TEST_CASE("pipeline: on a surface laid in several systems, every face only foldi
   CHECK(r.interiorFacesSplit > 8);  // more than the few cut on a surface of one system
   CHECK(r.interiorFacesSplit < 0.05 * r.hex.faceCount());
   CHECK(r.interiorHexagonFraction > 0.7);
-  CHECK(r.metrics.surfaceDistanceMax < 0.005);
+  // Within the goal: the surface fit folded 21 faces at first and is kept after freezing them (0.182 %).
+  CHECK(r.solve.surfaceFitted);
+  CHECK(r.metrics.surfaceDistanceMax <= 0.002);
   p.splitBoundaryPanels = false;
   const PipelineResult whole = runPipeline(p);
   CHECK_FALSE(whole.solve.converged);
