@@ -23,6 +23,12 @@ constexpr double kSqrt3 = 1.7320508075688772;
 constexpr double kEquilateralRatio = 0.5 * kSqrt3;  // |CM| / |AB| of an equilateral triangle (planar points)
 // A conjugate direction closer than ~8.6 degrees to AB is as good as asymptotic: the triangles would be slivers.
 constexpr double kMinConjugateSine = 0.15;
+// §5.3's re-used step carries a front across a parabolic curve in a few layers where the ideal step explodes.
+// A front whose ideal step explodes on most of its segments for more consecutive layers than this runs along
+// the curve instead, laying layers over and over (a developable, parabolic throughout, has no ideal step to
+// explode and re-uses its first layer's by design): Method 1 on the torus from Fig. 19's start at cell 0.024 re-used it on 1428 of 1918
+// layers, 84k vertices where 48k cover the torus, 1122 invalid stars. Such a front stops there.
+constexpr int kMaxReusedLayers = 20;
 constexpr double kNearParabolic = 0.1;  // kmin / kmax below which a point counts as near a parabolic curve
 constexpr double kResampleBelow = 0.55, kResampleAbove = 1.8;  // row spacing / cell that triggers a resample
 constexpr double kResampleLimit = 2.5;  // ... even at a parabolic curve
@@ -147,6 +153,7 @@ struct Front {
   bool active = true;
   double lastStep = 0;  // mean |MC| of its last layer
   int layers = 0;
+  int reusedLayers = 0;  // consecutive layers laid mostly with §5.3's re-used step (kMaxReusedLayers)
 };
 
 // One base segment A_i A_{i+1} of a layer with the apex direction and step of §5.1 and §5.3.
@@ -159,6 +166,7 @@ struct Segment {
   double validStep = 0;  // any apex beyond it on l keeps the star valid (Props 4, 5); 0 at parabolic points
   double ratio = 0;      // step / base, kept on the apex for §5.3 re-use
   bool bounded = false, reused = false;
+  bool exploded = false;    // the ideal step exploded at a parabolic curve (above maxStepRatio): re-used instead
   bool asymptotic = false;  // AB runs (nearly) along an asymptotic direction: no valid triangle on it
   bool degenerate = false;  // A and B (nearly) coincide, e.g. where a row folds back: no triangle on it
 };
@@ -418,6 +426,8 @@ class Laying {
   // What happened, for the notes.
   int boundedLayers_ = 0, boundedSegments_ = 0, reusedLayers_ = 0, reusedSegments_ = 0;
   int filledApexes_ = 0;
+  int parabolicStops_ = 0;  // fronts stopped running along a parabolic curve (kMaxReusedLayers)
+  std::string firstAlongParabolic_;
   int resampled_ = 0, boundaryStops_ = 0, collisions_ = 0, invalidDrops_ = 0, splits_ = 0, layers_ = 0;
   int asymptoticStops_ = 0, gapTriangles_ = 0;
   int boundaryEnds_ = 0, snappedEnds_ = 0;
@@ -557,7 +567,7 @@ Segment Laying::segment(const Row& row, int i) const {
         // §5.3: the zero-curvature direction points across a parabolic curve and the ideal step explodes; the
         // previous layer's step carries the layer across. No bounded step is above DE here (the stars at the
         // crossing are as degenerate as the indicatrix), so Method 2 is not held to validStep.
-        s.reused = true;
+        s.reused = s.exploded = true;
         s.validStep = 0;
         r = std::isnan(previous) ? o_.maxStepRatio : previous;
       } else if (o_.lowerBound > 0) {
@@ -1313,10 +1323,23 @@ void Laying::layLayer(std::size_t f, double stepScale) {
     }
   }
   std::vector<Front> produced;
+  bool alongParabolic = false;  // a run dropped for running along a parabolic curve (kMaxReusedLayers)
   for (const auto& [first, length] : runs) {
     if (length < 2) continue;
     const bool closedRun = A.closed && length == n;
+    int reusedHere = 0;
+    for (int k = 0; k < length; ++k) {
+      const Segment& seg = segments[(first + k) % n];
+      reusedHere += seg.exploded;
+    }
+    const int reusedRun = 2 * reusedHere >= length ? fronts_[f].reusedLayers + 1 : 0;
+    if (reusedRun > kMaxReusedLayers) {
+      if (firstAlongParabolic_.empty()) firstAlongParabolic_ = describe(walker_, segments[first].M);
+      alongParabolic = true;
+      continue;
+    }
     Front front;
+    front.reusedLayers = reusedRun;
     Row& C = front.row;
     C.closed = closedRun;
     std::vector<Apex> run;
@@ -1439,9 +1462,10 @@ void Laying::layLayer(std::size_t f, double stepScale) {
     }
     produced.push_back(std::move(front));
   }
+  parabolicStops_ += alongParabolic;
   if (produced.empty()) {
     fronts_[f].active = false;
-    ++boundaryStops_;
+    if (!alongParabolic) ++boundaryStops_;
     return;
   }
   for (Front& p : produced) p.layers = fronts_[f].layers + 1;
@@ -1975,6 +1999,9 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
                            " times where their spacing drifted from the cell, first near " + firstResample_);
   note(filledApexes_ > 0, std::to_string(filledApexes_) + " missing apexes filled in between their neighbours");
   note(boundaryStops_ > 0, std::to_string(boundaryStops_) + " fronts stopped at the boundary");
+  note(parabolicStops_ > 0, std::to_string(parabolicStops_) + " fronts stopped where they ran along a parabolic "
+                            "curve (the ideal step exploding on most of their segments for more than " +
+                            std::to_string(kMaxReusedLayers) + " layers), first near " + firstAlongParabolic_);
   note(boundaryEnds_ > 0, std::to_string(boundaryEnds_) + " notches between row ends on the boundary closed");
   note(snappedEnds_ > 0, std::to_string(snappedEnds_) + " row ends moved onto the boundary, which was less than " +
                              std::to_string(kBoundaryMin).substr(0, 3) + " of a spacing beyond them");
