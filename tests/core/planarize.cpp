@@ -113,18 +113,6 @@ TEST_CASE("planarize: shifting the face planes brings the nodes to the surface a
       CHECK(fitted.metrics.surfaceDistanceMax <= 0.002);
     }
   }
-  SECTION("where the shifts fold a few faces, those are frozen and the shifts solved again") {
-    // The vase at 1200 faces: the first solve folds 3 faces next to its parabolic circle; the fit used to
-    // be dropped whole, leaving 0.29 % of the diagonal.
-    PipelineParams p;
-    p.surface = "vase";
-    p.faces = 1200;
-    const PipelineResult r = runPipeline(p);
-    CHECK(r.solve.surfaceFitted);
-    CHECK(r.metrics.planarityMax <= 1e-9);
-    CHECK(r.metrics.selfIntersectingCount == 0);
-    CHECK(r.metrics.surfaceDistanceMax <= 0.002);
-  }
   SECTION("a plane has nothing to gain: the mesh is left as it was") {
     PipelineParams p;
     p.surface = "plane";
