@@ -232,8 +232,8 @@ TEST_CASE("pipeline: on a surface laid in several systems, every face only foldi
   CHECK(r.interiorFacesSplit > 8);  // more than the few cut on a surface of one system
   CHECK(r.interiorFacesSplit < 0.05 * r.hex.faceCount());
   CHECK(r.interiorHexagonFraction > 0.7);
-  // Within the goal: the surface fit folded 21 faces at first and is kept after freezing them in three
-  // re-solves (0.182 %; the fit was dropped whole before, 0.204 %). The same natively and in wasm.
+  // Within the goal: the surface fit folded 21 faces at first and is kept once the shifts around them are
+  // undone (0.181 %; the fit was dropped whole before, 0.204 %). The same natively and in wasm.
   CHECK(r.solve.surfaceFitted);
   CHECK(r.metrics.surfaceDistanceMax <= 0.002);
   p.splitBoundaryPanels = false;
