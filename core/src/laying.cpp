@@ -26,8 +26,9 @@ constexpr double kMinConjugateSine = 0.15;
 // §5.3's re-used step carries a front across a parabolic curve in a few layers where the ideal step explodes.
 // A front whose ideal step explodes on most of its segments for more consecutive layers than this runs along
 // the curve instead, laying layers over and over (a developable, parabolic throughout, has no ideal step to
-// explode and re-uses its first layer's by design): Method 1 on the torus from Fig. 19's start at cell 0.024 re-used it on 1428 of 1918
-// layers, 84k vertices where 48k cover the torus, 1122 invalid stars. Such a front stops there.
+// explode and re-uses its first layer's by design): Method 1 on the torus from Fig. 19's start at cell 0.024
+// re-used it on 1428 of 1918 layers, 84k vertices where 46k cover the torus, 1122 invalid stars. Such a
+// front stops there.
 constexpr int kMaxReusedLayers = 20;
 constexpr double kNearParabolic = 0.1;  // kmin / kmax below which a point counts as near a parabolic curve
 constexpr double kResampleBelow = 0.55, kResampleAbove = 1.8;  // row spacing / cell that triggers a resample
@@ -153,7 +154,7 @@ struct Front {
   bool active = true;
   double lastStep = 0;  // mean |MC| of its last layer
   int layers = 0;
-  int reusedLayers = 0;  // consecutive layers laid mostly with §5.3's re-used step (kMaxReusedLayers)
+  int reusedLayers = 0;  // consecutive layers whose ideal step exploded on most segments (kMaxReusedLayers)
 };
 
 // One base segment A_i A_{i+1} of a layer with the apex direction and step of §5.1 and §5.3.
@@ -1327,12 +1328,9 @@ void Laying::layLayer(std::size_t f, double stepScale) {
   for (const auto& [first, length] : runs) {
     if (length < 2) continue;
     const bool closedRun = A.closed && length == n;
-    int reusedHere = 0;
-    for (int k = 0; k < length; ++k) {
-      const Segment& seg = segments[(first + k) % n];
-      reusedHere += seg.exploded;
-    }
-    const int reusedRun = 2 * reusedHere >= length ? fronts_[f].reusedLayers + 1 : 0;
+    int explodedHere = 0;
+    for (int k = 0; k < length; ++k) explodedHere += segments[(first + k) % n].exploded;
+    const int reusedRun = 2 * explodedHere >= length ? fronts_[f].reusedLayers + 1 : 0;
     if (reusedRun > kMaxReusedLayers) {
       if (firstAlongParabolic_.empty()) firstAlongParabolic_ = describe(walker_, segments[first].M);
       alongParabolic = true;

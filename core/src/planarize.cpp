@@ -741,7 +741,7 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
     place(best);
     distance = bestDistance;
     if (!(distance < fit.before)) break;
-    int folded = selfIntersecting();
+    const int folded = selfIntersecting();
     if (folded <= foldedBefore) {
       fit.applied = true;
       fit.after = distance;
