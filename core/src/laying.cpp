@@ -154,7 +154,7 @@ struct Front {
   bool active = true;
   double lastStep = 0;  // mean |MC| of its last layer
   int layers = 0;
-  int reusedLayers = 0;  // consecutive layers whose ideal step exploded on most segments (kMaxReusedLayers)
+  int explodedLayers = 0;  // consecutive layers whose ideal step exploded on most segments (kMaxReusedLayers)
 };
 
 // One base segment A_i A_{i+1} of a layer with the apex direction and step of §5.1 and §5.3.
@@ -1330,14 +1330,14 @@ void Laying::layLayer(std::size_t f, double stepScale) {
     const bool closedRun = A.closed && length == n;
     int explodedHere = 0;
     for (int k = 0; k < length; ++k) explodedHere += segments[(first + k) % n].exploded;
-    const int reusedRun = 2 * explodedHere >= length ? fronts_[f].reusedLayers + 1 : 0;
-    if (reusedRun > kMaxReusedLayers) {
+    const int explodedRun = 2 * explodedHere >= length ? fronts_[f].explodedLayers + 1 : 0;
+    if (explodedRun > kMaxReusedLayers) {
       if (firstAlongParabolic_.empty()) firstAlongParabolic_ = describe(walker_, segments[first].M);
       alongParabolic = true;
       continue;
     }
     Front front;
-    front.reusedLayers = reusedRun;
+    front.explodedLayers = explodedRun;
     Row& C = front.row;
     C.closed = closedRun;
     std::vector<Apex> run;

@@ -165,6 +165,9 @@ namespace {
 // How far (as a ratio) a lay's vertex count may miss the faces asked for before it is laid again.
 constexpr double kCount = 1.1;
 
+// About how many faces (vertices of the triangulation) `cell` gives on `surface`: cellForFaceCount inverted.
+double facesAtCell(const Surface& surface, double cell) { return std::pow(cellForFaceCount(surface, 1) / cell, 2); }
+
 // Where L0 should start, and along which family, when the caller did not say. The middle of the bounds,
 // projected, suits a patch; on a ring (torus, cyclide, their meshes) it lands on the inner side, where rows
 // along the parallels must be resampled as they grow and cross the parabolic circles badly. So a few
@@ -310,7 +313,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
     t.field = params.field;
   auto checkCell = [&](const Surface& surface) {
     const double cell = params.cell > 0 ? params.cell : cellForFaceCount(surface, params.faces);
-    const double expected = std::pow(cellForFaceCount(surface, 1) / cell, 2);
+    const double expected = facesAtCell(surface, cell);
     if (expected > kMaxFaces)
       throw Error(ErrorCode::InvalidParameter, "cell " + number(cell) + " would give about " + number(std::round(expected)) +
                                                    " faces, more than the limit of " + std::to_string(kMaxFaces));
@@ -343,7 +346,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       if (!lo.start) {
         // With a cell given, the trial lays are sized by the faces that cell gives (about), not by the
         // default face count: a fine cell on an uploaded mesh had its trials laid at half its full size.
-        const int faces = params.cell > 0 ? int(std::lround(std::pow(cellForFaceCount(*t.surface, 1) / cell, 2))) : params.faces;
+        const int faces = params.cell > 0 ? int(std::lround(facesAtCell(*t.surface, cell))) : params.faces;
         choice = chooseStart(*t.surface, lo, faces, cancel);
         lo.start = choice.start;
         lo.base = choice.base;
@@ -361,7 +364,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
                        std::abs(std::log(trialVertices * trialCell * trialCell / (cell * cell) / params.faces)) > std::log(kCount);
       if (fromTrial) {
         lo.cell = std::clamp(trialCell * std::sqrt(trialVertices / params.faces), 0.5 * cell, 2 * cell);
-        if (std::pow(cellForFaceCount(*t.surface, 1) / lo.cell, 2) > kMaxFaces) lo.cell = cell;
+        if (facesAtCell(*t.surface, lo.cell) > kMaxFaces) lo.cell = cell;
         try {
           t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
         } catch (const Error& e) {
@@ -387,7 +390,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
           exponent = std::clamp(-std::log(trialVertices / counts[0]) / std::log(trialCell / cells[0]), 0.5, 4.0);
         lo.cell = cells[attempt - 1] * std::pow(std::max(counts[attempt - 1], 1.0) / params.faces, 1 / exponent);
         cells[attempt] = lo.cell;
-        if (std::pow(cellForFaceCount(*t.surface, 1) / lo.cell, 2) > kMaxFaces) break;
+        if (facesAtCell(*t.surface, lo.cell) > kMaxFaces) break;
         Triangulation again;
         try {
           again = layTriangulation(*t.surface, lo, progress, cancel);

@@ -298,13 +298,15 @@ int trimBoundarySlivers(Triangulation& triangulation, double ratio) {
 
 int openInvalidBoundaryStars(Triangulation& triangulation, const Surface& surface) {
   TriMesh& T = triangulation.mesh;
+  if (T.F.rows() == 0) return 0;
+  // Dropping triangles moves no vertex: their geometry (closest points on a mesh) is taken once.
+  const std::vector<LocalGeometry> geo = vertexGeometry(triangulation, surface);
   // One pass drops at most one triangle per corner; neighbouring stars next to the boundary (the cyclide
   // patch by Method 1: two, side by side) need another pass once the first has opened one of them.
   auto pass = [&]() {
     const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
     if (nf == 0) return 0;
     const VertexRings rings = vertexRings(T);
-    const std::vector<LocalGeometry> geo = vertexGeometry(triangulation, surface);
     const std::vector<char> judged = judgedStars(T, rings, geo, T.meanEdgeLength());
     std::vector<char> drop(nf, 0), touched(nv, 0);
     int dropped = 0;
