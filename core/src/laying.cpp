@@ -235,6 +235,14 @@ class PointGrid {
   // The same cells, by index (those holding a point).
   template <class Visit>
   void forNearCells(const Vec3& p, double radius, Visit visit) const {
+    forNearKeys(p, radius, [&](std::int64_t k) {
+      const int cell = find(k);
+      if (cell >= 0) visit(cell);
+    });
+  }
+  // The keys of the same block of cells, held points or not (cells may gain points later).
+  template <class Visit>
+  void forNearKeys(const Vec3& p, double radius, Visit visit) const {
     const double reach = radius * (1 + 1e-9) + 1e-9 * spacing_;  // beyond round-off in the cell indices
     const Eigen::Array3d lo = (p.array() - reach) / spacing_, hi = (p.array() + reach) / spacing_;
     std::int64_t a[3], b[3];
@@ -247,11 +255,10 @@ class PointGrid {
     }
     for (std::int64_t x = a[0]; x <= b[0]; ++x)
       for (std::int64_t y = a[1]; y <= b[1]; ++y)
-        for (std::int64_t z = a[2]; z <= b[2]; ++z) {
-          const int cell = find(key({x, y, z}));
-          if (cell >= 0) visit(cell);
-        }
+        for (std::int64_t z = a[2]; z <= b[2]; ++z) visit(key({x, y, z}));
   }
+  // The key of the cell holding p.
+  std::int64_t keyAt(const Vec3& p) const { return key(cellOf(p)); }
 
  private:
   // The occupied cells by key in an open-addressing table (linear probing, at most half full): the laying
@@ -1613,13 +1620,39 @@ int Laying::fillGaps() {
   std::vector<std::vector<int>> incident(nv);
   std::vector<char> used(nv, 0);
   // Passes are stamped, and an edge that found no triangle in a pass is looked at again only once a vertex near
-  // it has changed since. Each grid cell keeps the stamp of the pass that last gave one of its vertices a
-  // triangle (or put a vertex there): whether a vertex near an edge changed is then a look at the cells around
-  // it, not at every vertex in them. `cellOfVertex`: the grid cell of each vertex in it (-1: none).
+  // it has changed since: got a triangle, or was put in the grid, in a later pass. A failed edge watches the grid
+  // cells around it (`watchers`, by cell key, occupied or not), and a change in one of them in a later pass
+  // takes it off the failed list. Looking at the cells around every failed edge in every pass instead cost half
+  // of a lay at 100k faces on the uploaded bumps: the gaps between systems close like zips, a few triangles per
+  // pass over some 150 passes, while thousands of boundary edges wait.
   int stamp = 0;
-  std::vector<int> cellOfVertex(nv, -1), cellStamp;
+  struct Watch {
+    std::int64_t edge;
+    int kind, stamp;
+  };
+  std::unordered_map<std::int64_t, std::vector<Watch>> watchers;  // by cell key
+  std::unordered_map<std::int64_t, int> failed[3];  // per kind of pass: edge -> the pass it found nothing in
+  std::vector<std::int64_t> keyOfVertex(nv, 0);
+  std::vector<char> inGrid(nv, 0);
+  auto changed = [&](std::int64_t key) {  // a vertex of cell `key` changed in the current pass
+    const auto it = watchers.find(key);
+    if (it == watchers.end()) return;
+    std::vector<Watch>& list = it->second;
+    std::size_t kept = 0;
+    for (const Watch& w : list) {
+      // A change in the very pass the edge failed in does not count, as it never did (in `connect` such a
+      // change comes after the edge was looked at, so it may hide a triangle; counting it changes the meshes).
+      if (w.stamp == stamp) {
+        list[kept++] = w;
+        continue;
+      }
+      const auto f = failed[w.kind].find(w.edge);
+      if (f != failed[w.kind].end() && f->second == w.stamp) failed[w.kind].erase(f);  // else failed since, or free
+    }
+    list.resize(kept);
+  };
   auto touch = [&](int v) {
-    if (cellOfVertex[v] >= 0) cellStamp[cellOfVertex[v]] = stamp;  // stamps only grow
+    if (inGrid[v]) changed(keyOfVertex[v]);
   };
   auto addEdges = [&](int t) {
     const Eigen::Vector3i& tri = triangles_[t];
@@ -1642,10 +1675,10 @@ int Laying::fillGaps() {
   auto boundary = [&](int a, int b) { return has(a, b) && !has(b, a); };
   PointGrid grid(reach);
   auto gridInsert = [&](int v) {
-    const int cell = grid.insert(v, vertices_[v].point());
-    cellOfVertex[v] = cell;
-    if (cell >= static_cast<int>(cellStamp.size())) cellStamp.resize(cell + 1, 0);
-    cellStamp[cell] = std::max(cellStamp[cell], stamp);
+    grid.insert(v, vertices_[v].point());
+    keyOfVertex[v] = grid.keyAt(vertices_[v].point());
+    inGrid[v] = 1;
+    changed(keyOfVertex[v]);
   };
   for (int v = 0; v < nv; ++v)
     if (used[v]) gridInsert(v);
@@ -1734,13 +1767,11 @@ int Laying::fillGaps() {
     std::sort(list.begin(), list.end());
     return list;
   };
-  std::unordered_map<std::int64_t, int> failed[3];  // per kind of pass: edge -> the pass it found nothing in
-  auto worthLooking = [&](int kind, int a, int b) {
-    const auto it = failed[kind].find(edgeKey(a, b));
-    if (it == failed[kind].end()) return true;
-    bool changed = false;
-    grid.forNearCells(0.5 * (at(a) + at(b)), reach, [&](int c) { changed = changed || cellStamp[c] > it->second; });
-    return changed;
+  auto worthLooking = [&](int kind, int a, int b) { return failed[kind].find(edgeKey(a, b)) == failed[kind].end(); };
+  auto fail = [&](int kind, std::int64_t e) {
+    failed[kind][e] = stamp;
+    const int a = static_cast<int>(e >> 32), b = static_cast<int>(e & 0xFFFFFFFF);
+    grid.forNearKeys(0.5 * (at(a) + at(b)), reach, [&](std::int64_t key) { watchers[key].push_back({e, kind, stamp}); });
   };
   std::unordered_map<std::int64_t, bool> outside;  // alongBoundary, once per edge
   // One pass of triangles on laid vertices: the best candidate of every boundary edge, best first.
@@ -1769,7 +1800,7 @@ int Laying::fillGaps() {
             break;
           }
         if (best.q >= 0) candidates.push_back(best);
-        else failed[kind][e] = stamp;
+        else fail(kind, e);
       }
     std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
       return x.sine != y.sine ? x.sine > y.sine : std::tie(x.a, x.b) < std::tie(y.a, y.b);
@@ -1792,7 +1823,7 @@ int Laying::fillGaps() {
     for (const std::int64_t e : openEdges()) {
         const int a = static_cast<int>(e >> 32), b = static_cast<int>(e & 0xFFFFFFFF);
         if (!boundary(a, b) || !worthLooking(2, a, b)) continue;
-        failed[2][e] = stamp;  // whatever happens: a success closes the edge
+        fail(2, e);  // whatever happens: a success closes the edge
         // The apex of the ideal triangle on a -> b (§5.1), on its right, with the §5.3 lower bound on the step;
         // equilateral where there is none (K = 0, a base along an asymptotic direction, an exploding step).
         const Vec3 n = (vertices_[a].g.normal + vertices_[b].g.normal).normalized();
@@ -1817,14 +1848,16 @@ int Laying::fillGaps() {
         vertices_.push_back(p);
         incident.emplace_back();
         used.push_back(0);
-        cellOfVertex.push_back(-1);
+        keyOfVertex.push_back(0);
+        inGrid.push_back(0);
         double sine = 0;
         const bool fits = admissible(a, b, q, sine);
         vertices_.pop_back();  // addVertex puts it back with the rest of the laying's bookkeeping
         if (!fits) {
           incident.pop_back();
           used.pop_back();
-          cellOfVertex.pop_back();
+          keyOfVertex.pop_back();
+          inGrid.pop_back();
           continue;
         }
         addVertex(p, std::numeric_limits<double>::quiet_NaN());
