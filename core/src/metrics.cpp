@@ -123,24 +123,30 @@ bool faceSelfIntersects(const PolyMesh& mesh, int face) {
 }
 
 bool faceSelfIntersects(const PolyMesh& mesh, int face, const Vec3& normal) {
-  return polygonSelfIntersects(planarCorners(mesh, face, FacePlane{Vec3::Zero(), normal}));
+  thread_local std::vector<Vec2> p;  // asked often, of every face in a fit or a solver's fold check
+  planarCorners(mesh, face, FacePlane{Vec3::Zero(), normal}, p);
+  return polygonSelfIntersects(p);
 }
 
 double faceFoldMargin(const PolyMesh& mesh, int face, const Vec3& normal) {
-  const std::vector<Vec2> p = planarCorners(mesh, face, FacePlane{Vec3::Zero(), normal});
+  // The local solver asks this of every face in every sweep: the corners go into storage kept from call to
+  // call, and the square root is taken once, of the smallest squared distance (the same number: a square
+  // root is rounded correctly, so it keeps the order).
+  thread_local std::vector<Vec2> p;
+  planarCorners(mesh, face, FacePlane{Vec3::Zero(), normal}, p);
   if (polygonSelfIntersects(p)) return 0.0;
   const int n = static_cast<int>(p.size());
-  double margin = std::numeric_limits<double>::infinity();
+  double margin2 = std::numeric_limits<double>::infinity();
   for (int j = 0; j < n; ++j) {
     const Vec2 a = p[j], ab = p[(j + 1) % n] - a;
     const double length2 = ab.squaredNorm();
     for (int i = 0; i < n; ++i) {
       if (i == j || i == (j + 1) % n) continue;
       const double t = length2 > 0 ? std::clamp((p[i] - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
-      margin = std::min(margin, (p[i] - a - t * ab).norm());
+      margin2 = std::min(margin2, (p[i] - a - t * ab).squaredNorm());
     }
   }
-  return margin;
+  return std::sqrt(margin2);
 }
 
 double facePlanarityDiagonals(const PolyMesh& mesh, int face) {
