@@ -1,6 +1,7 @@
 #include <catch.hpp>
 
 #include <cmath>
+#include <optional>
 
 #include "phex/error.hpp"
 #include "phex/pipeline.hpp"
@@ -475,4 +476,24 @@ TEST_CASE("pipeline: rows ending on an uploaded mesh's boundary keep its P-Hex v
   CHECK(r.check.edgeMin >= 0.4 * r.check.edgeMean);
   CHECK(r.interiorFacesSplit == 0);
   CHECK(notes.find("row ends moved onto the boundary") != std::string::npos);
+}
+
+TEST_CASE("pipeline: the count loop's third lay follows the counts only where they follow the cell") {
+  // Counts that scale like a covering (vertices ~ cell^-2): the measured exponent, lay again.
+  const double c0 = 0.02, n0 = 12000;
+  const double c1 = c0 * std::sqrt(12000.0 / 10000.0), n1 = n0 * std::pow(c1 / c0, -2.1);
+  const std::optional<double> smooth = phex::thirdLayExponent(c0, n0, c1, n1, 1.12);
+  REQUIRE(smooth);
+  CHECK(*smooth == Approx(2.1));
+  // The uploaded bumps at 100k faces: 117k then 111k vertices, exponent 0.8, the closer lay 10.5 % over.
+  CHECK_FALSE(phex::thirdLayExponent(0.010104, 117453, 0.0109214, 110503, 1.105));
+  // The same lays missing by more than 15 %: a third lay, with the exponent kept within [0.5, 4].
+  const std::optional<double> far = phex::thirdLayExponent(0.010104, 117453, 0.0109214, 110503, 1.19);
+  REQUIRE(far);
+  CHECK(*far == Approx(0.78).margin(0.01));
+  // Steep counts lie on both sides of the count asked for, and the third lay falls between them, however
+  // close the closer lay: the analytic bumps at 4000 faces, 4553 then 2828 vertices (exponent 7.4), 14 % off.
+  const std::optional<double> steep = phex::thirdLayExponent(0.0541574, 4553, 0.0577799, 2828, 1.138);
+  REQUIRE(steep);
+  CHECK(*steep == 4.0);
 }

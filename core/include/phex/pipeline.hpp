@@ -131,6 +131,14 @@ struct TriangulationStage {
 TriangulationStage triangulate(const PipelineParams& params, const ProgressFn& progress = {},
                                const CancelFlag* cancel = nullptr);
 
+// `triangulate` lays again (at most twice) where a lay misses the faces asked for by more than 10 %; the
+// third lay's cell follows the exponent e of vertices ~ cell^-e that the first two measured. This returns
+// that exponent (clamped to [0.5, 4]), or nullopt where a third lay is a gamble: the two counts hardly
+// follow the cell (e below 1, where a covering gives 2: the lays covered the surface in different ways, and
+// the secant reaches far beyond both) and the closer lay misses by at most 15 % already (`closestMiss`, a
+// ratio >= 1).
+std::optional<double> thirdLayExponent(double cell0, double count0, double cell1, double count1, double closestMiss);
+
 PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress = {},
                            const CancelFlag* cancel = nullptr);
 
