@@ -1654,10 +1654,14 @@ int Laying::fillGaps() {
   auto touch = [&](int v) {
     if (inGrid[v]) changed(keyOfVertex[v]);
   };
+  std::vector<double> longestEdge(nv, 0.0);  // each vertex's longest (clear skips vertices farther than it)
   auto addEdges = [&](int t) {
     const Eigen::Vector3i& tri = triangles_[t];
     for (int c = 0; c < 3; ++c) {
       const int x = tri(c), y = tri((c + 1) % 3);
+      const double length = (vertices_[x].point() - vertices_[y].point()).norm();
+      longestEdge[x] = std::max(longestEdge[x], length);
+      longestEdge[y] = std::max(longestEdge[y], length);
       if (!open.erase(edgeKey(y, x))) open.insert(edgeKey(x, y));
       incident[tri(c)].push_back(t);
       used[tri(c)] = 1;
@@ -1706,12 +1710,14 @@ int Laying::fillGaps() {
   // sine is at least minSine and edges up to maxEdge.
   double minSine = kFillSine, maxEdge = kFillEdge * o_.cell;
   auto shaped = [&](int a, int b, int q, double& sine) {
-    if (q == a || q == b || has(a, q) || has(q, b)) return false;
-    const Vec3 n = (vertices_[a].g.normal + vertices_[b].g.normal + vertices_[q].g.normal).normalized();
+    if (q == a || q == b) return false;
     const Vec3 &A = at(a), &B = at(b), &Q = at(q);
-    if ((A - B).cross(Q - B).dot(n) <= 0) return false;  // not on the right of a -> b, seen from the normal
+    // The edge lengths first: most of the vertices a search visits are too far.
     const double ab = (B - A).norm(), aq = (Q - A).norm(), bq = (Q - B).norm();
     if (std::max({ab, aq, bq}) > maxEdge) return false;
+    if (has(a, q) || has(q, b)) return false;
+    const Vec3 n = (vertices_[a].g.normal + vertices_[b].g.normal + vertices_[q].g.normal).normalized();
+    if ((A - B).cross(Q - B).dot(n) <= 0) return false;  // not on the right of a -> b, seen from the normal
     const double twiceArea = (A - B).cross(Q - B).norm();
     sine = std::min({twiceArea / (ab * aq), twiceArea / (ab * bq), twiceArea / (aq * bq)});
     return sine >= minSine;
@@ -1732,6 +1738,10 @@ int Laying::fillGaps() {
       const Vec3& X = at(x);
       if (std::abs((X - c).dot(n)) > reach) return;
       const Vec2 x2 = flat(X);
+      // Farther from the triangle's box than its longest edge (flattening shortens edges): x is not inside,
+      // and none of its edges reaches the triangle.
+      const Vec2 gap = (lo - x2).cwiseMax(x2 - hi).cwiseMax(0.0);
+      if (gap.norm() > longestEdge[x] * (1 + 1e-9) + 1e-12 * reach) return;
       if (x != a && x != b && x != q && cross2(b2 - a2, x2 - a2) <= 0 && cross2(q2 - b2, x2 - b2) <= 0 &&
           cross2(a2 - q2, x2 - q2) <= 0)
         clear = false;
@@ -1848,6 +1858,7 @@ int Laying::fillGaps() {
         vertices_.push_back(p);
         incident.emplace_back();
         used.push_back(0);
+        longestEdge.push_back(0);
         keyOfVertex.push_back(0);
         inGrid.push_back(0);
         double sine = 0;
@@ -1856,6 +1867,7 @@ int Laying::fillGaps() {
         if (!fits) {
           incident.pop_back();
           used.pop_back();
+          longestEdge.pop_back();
           keyOfVertex.pop_back();
           inGrid.pop_back();
           continue;
