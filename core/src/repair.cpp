@@ -77,6 +77,11 @@ class Repair {
       if (!cache_[i].valid) return true;
     return false;
   }
+  int invalidCount() const {
+    int count = 0;
+    for (int v = 0; v < static_cast<int>(T_.V.rows()); ++v) count += invalid(v);
+    return count;
+  }
 
   // What the sweeps need besides the cache (left out when no star is invalid).
   void prepare() {
@@ -531,13 +536,17 @@ int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo) 
 
 RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps) {
   if (triangulation.mesh.F.rows() == 0 || maxSweeps <= 0) return {};
-  Repair repair(triangulation, surface);
-  RepairResult r = repair.run(maxSweeps);
+  RepairResult r;
+  std::vector<LocalGeometry> geometry;
+  {
+    Repair repair(triangulation, surface);
+    r = repair.run(maxSweeps);
+    geometry = repair.takeGeometry();
+  }
   // Stars the moves could not make valid: flip edges around them, then move again (the vertices' geometry as
   // the moves left it: a flip moves none).
   int flips = 0;
   if (r.invalidAfter > 0) {
-    std::vector<LocalGeometry> geometry = repair.takeGeometry();
     flips = flipAtInvalidStars(triangulation, geometry);
     if (flips > 0) {
       Repair again(triangulation, surface, std::move(geometry));
@@ -545,7 +554,33 @@ RepairResult repairStars(Triangulation& triangulation, const Surface& surface, i
       r.invalidAfter = s.invalidAfter;
       r.moved += s.moved;
       r.sweeps += s.sweeps;
+      geometry = again.takeGeometry();
     }
+  }
+  // A repair judges the stars it was built with. A move across a parabolic curve changes a vertex's kind, and
+  // with it which stars checkTriangulation judges (a star is judged where its corners share its kind): judged
+  // afresh, stars can be invalid that the repair never saw. Method 1 on the torus without the lower bound at
+  // 2000 faces counted 48 of 48 repaired, and the check found 46 invalid next to the parabolic circle. So
+  // where vertices moved the stars are judged again, and where that finds more invalid ones than the repair
+  // left, it runs again, and again while that mends some, up to kRejudges times; the count it leaves is the
+  // check's (but after the last of those runs). Stars a repair left without any newly judged are not tried
+  // again: another run rarely mends them (the uploaded cyclide at 1000 faces: 31 -> 29 for 220 ms).
+  constexpr int kRejudges = 4;
+  for (int round = 0, moved = r.moved; round < kRejudges && moved > 0; ++round) {
+    Repair fresh(triangulation, surface, geometry);
+    const int judged = fresh.invalidCount();
+    if (judged == 0 || (round == 0 && judged <= r.invalidAfter)) {
+      r.invalidAfter = judged;
+      break;
+    }
+    if (judged > r.invalidAfter) r.invalidBefore += judged - r.invalidAfter;  // newly judged invalid
+    const RepairResult s = fresh.run(maxSweeps);
+    r.invalidAfter = s.invalidAfter;
+    r.moved += s.moved;
+    r.sweeps += s.sweeps;
+    moved = s.moved;
+    geometry = fresh.takeGeometry();
+    if (s.invalidAfter >= s.invalidBefore) break;  // mended none
   }
   r.flips = flips;
   if (r.invalidBefore > 0)
