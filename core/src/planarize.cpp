@@ -672,6 +672,7 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
     return count;
   };
   fit.before = footPoints();
+  const std::vector<LocalGeometry> feetAtStart = feet;
   std::vector<char> foldedAtStart(nf, 0);
   for (int f = 0; f < nf; ++f) foldedAtStart[f] = faceSelfIntersects(mesh, f, normal[f]);
   const int foldedBefore = static_cast<int>(std::count(foldedAtStart.begin(), foldedAtStart.end(), 1));
@@ -691,7 +692,7 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
   for (int attempt = 0;; ++attempt) {
     if (attempt > 0) {
       mesh.V = x0;
-      footPoints();
+      feet = feetAtStart;  // the closest points of x0, as the first attempt found them
     }
     Eigen::VectorXd delta = Eigen::VectorXd::Zero(nf);
     double distance = fit.before;
