@@ -500,3 +500,12 @@ TEST_CASE("pipeline: the count loop's third lay follows the counts only where th
   REQUIRE(steep);
   CHECK(*steep == 4.0);
 }
+
+TEST_CASE("pipeline: a lay again keeps its cell within a factor 2 of the area estimate's") {
+  // Scaled by the square root of the count's ratio where the exponent is 2.
+  CHECK(phex::relayCell(0.1, 12000, 10000, 2.0, 0.1) == Approx(0.1 * std::sqrt(1.2)));
+  // A lay that stopped short (6 vertices for 64 asked) with a flat exponent (0.5) would send the cell down by
+  // the square of the ratio, 1/114, and lay 350k triangles (an uploaded cyclide): half the estimate's at most.
+  CHECK(phex::relayCell(0.3, 6, 64, 0.5, 0.25) == Approx(0.125));
+  CHECK(phex::relayCell(0.1, 1e6, 64, 2.0, 0.1) == Approx(0.2));
+}

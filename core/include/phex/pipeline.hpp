@@ -138,6 +138,9 @@ TriangulationStage triangulate(const PipelineParams& params, const ProgressFn& p
 // the secant reaches far beyond both) and the closer lay misses by at most 15 % already (`closestMiss`, a
 // ratio >= 1).
 std::optional<double> thirdLayExponent(double cell0, double count0, double cell1, double count1, double closestMiss);
+// The cell of a lay again after one at `cell` gave `count` vertices for `faces` asked: scaled by
+// (count / faces)^(1 / exponent), and kept within a factor 2 of the area estimate's cell `estimateCell`.
+double relayCell(double cell, double count, int faces, double exponent, double estimateCell);
 
 PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress = {},
                            const CancelFlag* cancel = nullptr);
