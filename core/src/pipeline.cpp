@@ -412,8 +412,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
               thirdLayExponent(cells[0], counts[0], cells[1], counts[1], std::exp(miss(t.triangulation)));
           if (!e) break;
           exponent = *e;
-        }
-        else if (attempt == 1 && fromTrial && counts[0] > 0 && std::abs(std::log(trialCell / cells[0])) > 1e-3)
+        } else if (attempt == 1 && fromTrial && counts[0] > 0 && std::abs(std::log(trialCell / cells[0])) > 1e-3)
           exponent = std::clamp(-std::log(trialVertices / counts[0]) / std::log(trialCell / cells[0]), 0.5, 4.0);
         lo.cell = relayCell(cells[attempt - 1], counts[attempt - 1], params.faces, exponent, cell);
         cells[attempt] = lo.cell;
