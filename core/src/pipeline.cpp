@@ -304,8 +304,15 @@ std::string resolveField(const PipelineParams& params) {
   return spec ? spec->field : params.field;
 }
 
+namespace {
+// The exponent e of vertices ~ cell^-e between two lays.
+double countExponent(double cell0, double count0, double cell1, double count1) {
+  return -std::log(count1 / count0) / std::log(cell1 / cell0);
+}
+}  // namespace
+
 std::optional<double> thirdLayExponent(double cell0, double count0, double cell1, double count1, double closestMiss) {
-  const double measured = -std::log(count1 / count0) / std::log(cell1 / cell0);
+  const double measured = countExponent(cell0, count0, cell1, count1);
   // Counts that hardly change with the cell (an exponent below 1, where a covering gives 2) come from lays
   // that cover the surface in different ways — on the uploaded bumps, whether the first system of rows runs
   // on past the saddle or leaves the second bump to a system of its own (about 12.5 and 9.7 vertices per unit
@@ -413,7 +420,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
           if (!e) break;
           exponent = *e;
         } else if (attempt == 1 && fromTrial && counts[0] > 0 && std::abs(std::log(trialCell / cells[0])) > 1e-3)
-          exponent = std::clamp(-std::log(trialVertices / counts[0]) / std::log(trialCell / cells[0]), 0.5, 4.0);
+          exponent = std::clamp(countExponent(cells[0], counts[0], trialCell, trialVertices), 0.5, 4.0);
         lo.cell = relayCell(cells[attempt - 1], counts[attempt - 1], params.faces, exponent, cell);
         cells[attempt] = lo.cell;
         if (facesAtCell(*t.surface, lo.cell) > kMaxFaces) break;

@@ -269,15 +269,17 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
       offset[f] = fp.normal.dot(fp.centroid);
     }
     faceWorst[f] = faceEnergy[f] = 0;
-    double radius = 0, size = 0;  // about the first corner (the diameter is at most twice that), and from 0
     for (int i = 0; i < n; ++i) {
       const double r = (normal[f].dot(mesh.vertex(ids[i])) - offset[f]) * std::sqrt(faceScale[f]);
       faceWorst[f] = std::max(faceWorst[f], std::abs(r));
       faceEnergy[f] += r * r;
-      radius = std::max(radius, (mesh.vertex(ids[i]) - mesh.vertex(ids[0])).norm());
-      size = std::max(size, mesh.vertex(ids[i]).cwiseAbs().maxCoeff());
     }
     if (foldMargin[f] > 0) {
+      double radius = 0, size = 0;  // about the first corner (the diameter is at most twice that), and from 0
+      for (int i = 0; i < n; ++i) {
+        radius = std::max(radius, (mesh.vertex(ids[i]) - mesh.vertex(ids[0])).norm());
+        size = std::max(size, mesh.vertex(ids[i]).cwiseAbs().maxCoeff());
+      }
       // Less a margin for round-off as well: measured again, a face whose bound was 1e-14 (at coordinates
       // of 1) measured 0, not simple, on the uploaded bumps at 100k faces.
       const double turn = std::min((normal[f] - before).norm(), (normal[f] + before).norm());

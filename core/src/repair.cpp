@@ -567,7 +567,7 @@ RepairResult repairStars(Triangulation& triangulation, const Surface& surface, i
   // again: another run rarely mends them (the uploaded cyclide at 1000 faces: 31 -> 29 for 220 ms).
   constexpr int kRejudges = 4;
   for (int round = 0, moved = r.moved; round < kRejudges && moved > 0; ++round) {
-    Repair fresh(triangulation, surface, geometry);
+    Repair fresh(triangulation, surface, std::move(geometry));  // taken back below where it runs
     const int judged = fresh.invalidCount();
     if (judged == 0 || (round == 0 && judged <= r.invalidAfter)) {
       r.invalidAfter = judged;
