@@ -213,6 +213,27 @@ std::optional<Vec3> DirectionField::direction(const SurfacePoint& p, Family fami
     // umbilic region, where the meridian or its perpendicular stands in for them.
     const Vec3 other = g.normal.cross(*d);
     if (std::abs(other.dot(*previous)) > std::abs(d->dot(*previous))) d = other;
+  } else if (d && spec_.kind == FieldKind::Angle && previous) {
+    // The same for the principal directions turned by an angle: across an umbilic curve d1 and d2 swap, and
+    // a line of d1 turned by 30 degrees would turn by 90 there; so would its conjugate lines. Of the two
+    // turned principal directions (or their conjugates) the one nearer the line's own direction is followed.
+    // The vase laid along angle:90 or angle:0 met its umbilic circle in the belly and gave up there, with
+    // rows along the asymptotic direction, where "principal" (followed by continuity) lays it whole.
+    const Vec3 other = g.normal.cross(*d);
+    std::optional<Vec3> candidates[2] = {d, other};
+    if (family == Family::Conjugate)
+      for (std::optional<Vec3>& c : candidates) {
+        if (umbilic) {
+          c = g.normal.cross(*c);
+        } else {
+          const std::optional<Vec2> conjugate = conjugateDirection(g, tangentVector(g, *c));
+          c = conjugate ? std::optional<Vec3>(spatialVector(g, *conjugate)) : std::nullopt;
+        }
+      }
+    auto nearness = [&](const std::optional<Vec3>& c) { return c ? std::abs(c->dot(*previous)) : -1.0; };
+    d = nearness(candidates[1]) > nearness(candidates[0]) ? candidates[1] : candidates[0];
+    // §5.3: at a parabolic point the zero-curvature direction is conjugate to every direction.
+    anyIsFine = !d;
   } else if (d && family == Family::Conjugate) {
     if (spec_.kind == FieldKind::Principal || umbilic) {
       d = g.normal.cross(*d);  // principal directions (all, at an umbilic) are conjugate and orthogonal

@@ -297,6 +297,33 @@ TEST_CASE("laying: vase bottom-up re-uses the step across the parabolic circle, 
   CHECK(hasNote(around, "lower bound"));
 }
 
+TEST_CASE("laying: principal directions turned by an angle are followed by continuity, as the principal ones are") {
+  // The vase's belly holds an umbilic circle, where k1 and k2 cross and the labels d1, d2 swap. A line of
+  // d1 turned by an angle turned by 90 degrees there, onto the asymptotic direction next to the neck, and
+  // the lay gave up ("angle:90", the longitudinal Fig. 18 preset, and "angle:0"). Now it lays whole, as
+  // "principal" does (which "angle:0" is).
+  const ParametricSurfacePtr s = makeSurface("vase");
+  const auto d = s->domain();
+  double gap = std::numeric_limits<double>::infinity();  // the smallest relative k1 - k2 along a meridian
+  for (int i = 1; i < 100; ++i) {
+    const LocalGeometry g = s->geometryAt(0, d.v0 + (d.v1 - d.v0) * i / 100);
+    gap = std::min(gap, std::abs(g.k1 - g.k2) / (std::abs(g.k1) + std::abs(g.k2)));
+  }
+  CHECK(gap < 0.02);  // the umbilic circle
+  const Triangulation principal = layTriangulation(*s, options(0.1, LayingMethod::Prespecified));
+  for (const char* field : {"angle:0", "angle:90", "angle:30"}) {
+    INFO(field);
+    const Triangulation t = layTriangulation(*s, options(0.1, LayingMethod::Prespecified, field));
+    const Quality q = quality(t, *s, 0.1);
+    REPORT(q);
+    CHECK(q.check.regularFraction >= 0.95);
+    CHECK(q.check.invalidStars.empty());
+    CHECK(q.check.coverage > 0.9);
+    if (std::string(field) != "angle:30")
+      CHECK(std::abs(double(t.mesh.F.rows()) / double(principal.mesh.F.rows()) - 1) < 0.02);
+  }
+}
+
 TEST_CASE("laying: hyperboloid, invalid flat lattice detected and a valid laying produced (Fig. 11)") {
   const ParametricSurfacePtr s = makeSurface("hyperboloid");
   const auto d = s->domain();
