@@ -180,6 +180,17 @@ double facesAtCell(const Surface& surface, double cell) { return std::pow(cellFo
 // where that network cannot cover the surface (round bumps, whose parabolic rings no singularity-free
 // network contains) the other family is laid from the same candidates and kept if it scores better.
 constexpr double kPoorTrial = 0.8;  // a trial score (coverage minus 5x the bad share) below which more is tried
+// A fourth candidate lies on a parabolic curve (the sample of smallest kmin / kmax, where under
+// kParabolicStart; Method 2 only, see chooseStart): on a ring its rows along the parallels start on the
+// parabolic circle, whose length lies between the inner and the outer equator's, so they grow and shrink
+// within the resampling bounds and are never resampled, where from the inner equator they are resampled
+// twice, leaving rings of pentagons and heptagons (the torus by Method 2 at 2000 faces: 92 % valence 6, and
+// 100 % from the parabolic circle; the uploaded torus alike). The trials are then also ranked by their share
+// of interior vertices of valence 6 (kIrregularPrice per unit missing), which coverage and invalid stars do
+// not see.
+constexpr double kParabolicStart = 0.1;
+constexpr int kParabolicSamples = 1000;  // a 32 x 32 grid on a parametric surface: within 6 degrees of the circle
+constexpr double kIrregularPrice = 1.0;
 
 // The most nearly umbilic of some 400 samples of the surface (relative k1 - k2 under kNearUmbilic) where it
 // is curved (not on a plane or a developable), or nullopt.
@@ -219,8 +230,13 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
   const int trialFaces = std::clamp(faces / 2, 50, 1000);
   trial.cell = options.cell * std::sqrt(double(faces) / trialFaces);
   int laid = 0;
-  // The score of a trial lay, or nullopt where it cannot be laid.
-  auto score = [&]() -> std::optional<std::pair<double, double>> {
+  // The score of a trial lay (`rank`; `plain` without the price of irregular vertices), or nullopt where it
+  // cannot be laid.
+  struct Trial {
+    double rank, plain, vertices;
+    int systems;
+  };
+  auto score = [&]() -> std::optional<Trial> {
     Triangulation t;
     try {
       t = layTriangulation(surface, trial, {}, cancel);
@@ -232,39 +248,68 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
     // The dual as §6 builds it, without untangling: the count judges the triangulation.
     const int folded = measure(dupinDual(t, surface, false).mesh).selfIntersectingCount;
     const double bad = double(check.invalidStars.size() + folded) / std::max<Eigen::Index>(t.mesh.V.rows(), 1);
-    return std::make_pair((check.coverage >= 0 ? check.coverage : 1.0) - 5 * bad, double(t.mesh.V.rows()));
+    const double plain = (check.coverage >= 0 ? check.coverage : 1.0) - 5 * bad;
+    // Where the lay took several systems of rows (the bumps), their seams' irregular vertices at a trial's
+    // size say little about the full lay's: there coverage and validity alone rank.
+    const double irregular = t.systems > 1 ? 0.0 : 1 - check.regularFraction;
+    return Trial{plain - kIrregularPrice * irregular, plain, double(t.mesh.V.rows()), t.systems};
   };
-  // Every candidate laid along trial.base; the best start, its score and vertex count. The middle of the
-  // bounds (the first candidate) keeps the start unless another is clearly better: at a quarter of the size
-  // small differences are noise.
+  // Every candidate laid along trial.base; the best start, its score and vertex count, by the score with the
+  // price of irregular vertices (`ranked`) and without it (`plain`). The middle of the bounds (the first
+  // candidate) keeps the start unless another is clearly better: at a quarter of the size small differences
+  // are noise.
   struct Best {
     std::optional<Vec3> start;
     double score = -std::numeric_limits<double>::infinity(), vertices = 0;
+    int systems = 0;
+  };
+  struct Bests {
+    Best ranked, plain;
+  };
+  auto consider = [&](const Vec3& c, Bests& b) {
+    trial.start = c;
+    const auto s = score();
+    if (!s) return;
+    ++laid;
+    const double handicap = c == candidates.front() ? 0.0 : 0.05;
+    if (s->rank - handicap > b.ranked.score) b.ranked = {c, s->rank - handicap, s->vertices, s->systems};
+    if (s->plain - handicap > b.plain.score) b.plain = {c, s->plain - handicap, s->vertices, s->systems};
   };
   auto bestStart = [&]() {
-    Best b;
-    for (const Vec3& c : candidates) {
-      trial.start = c;
-      const auto s = score();
-      if (!s) continue;
-      ++laid;
-      const double value = s->first - (c == candidates.front() ? 0.0 : 0.05);
-      if (value > b.score) b = {c, value, s->second};
-    }
+    Bests b;
+    for (const Vec3& c : candidates) consider(c, b);
     return b;
   };
-  Best best = bestStart();
+  Bests firstFamily = bestStart();
+  // The bumps' lays take several systems of rows from every start, and one from their parabolic rings laid
+  // fewer hexagons at 2000-4000 faces (0.81 -> 0.76) and more at 5000-13000: not tried there. Nor by Method
+  // 1, whose ideal step explodes along a base curve on a parabolic curve: on the torus its rows from there
+  // left 1-5 invalid stars from 5000 faces on, and the counts followed the cell poorly (8503 faces for 10k).
+  if (firstFamily.ranked.systems == 1 && options.method == LayingMethod::Prespecified &&
+      most.gaussianCurvature() - least.gaussianCurvature() > 0) {  // not a developable, parabolic throughout
+    std::optional<Vec3> parabolic;
+    double lowest = kParabolicStart;
+    for (const LocalGeometry& g : surface.samples(kParabolicSamples)) {
+      const double a = std::abs(g.k1), b = std::abs(g.k2), kmax = std::max(a, b);
+      if (!(kmax > 0)) continue;
+      const double ratio = std::min(a, b) / kmax;
+      if (ratio < lowest) lowest = ratio, parabolic = g.point;
+    }
+    if (parabolic) consider(*parabolic, firstFamily);
+  }
+  Best best = firstFamily.ranked;
   // Only when the family along the zero-curvature direction leaves much of the surface uncovered or invalid
   // (a score below kPoorTrial) is the other family tried, from every candidate: on surfaces whose network
   // contains the parabolic curves it costs no lay. On such a surface the half-size trials predict the full
   // lay poorly (a laying that covers 44 % at half the size may cover 28 % at full size), so the two
   // families' best starts are then laid once more at full size, and the better of those decides.
   bool otherFamily = false;
-  if (best.score < kPoorTrial && best.start &&
+  if (firstFamily.plain.score < kPoorTrial && best.start &&
       (choice.base == BaseFamily::First || choice.base == BaseFamily::Conjugate)) {
+    best = firstFamily.plain;  // coverage and validity decide here, as between the families below
     const BaseFamily rule = choice.base, other = rule == BaseFamily::First ? BaseFamily::Conjugate : BaseFamily::First;
     trial.base = other;
-    const Best alternative = bestStart();
+    const Best alternative = bestStart().plain;
     if (alternative.start) {
       const double trialCell = trial.cell;
       trial.cell = options.cell;
@@ -275,7 +320,7 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
       trial.base = other;
       const auto fullOther = score();
       trial.cell = trialCell;
-      if (fullOther && (!full || fullOther->first > full->first)) {
+      if (fullOther && (!full || fullOther->plain > full->plain)) {
         best = alternative;
         choice.base = other;
         otherFamily = true;
