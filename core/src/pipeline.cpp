@@ -185,9 +185,9 @@ constexpr double kPoorTrial = 0.8;  // a trial score (coverage minus 5x the bad 
 // parabolic circle, whose length lies between the inner and the outer equator's, so they grow and shrink
 // within the resampling bounds and are never resampled, where from the inner equator they are resampled
 // twice, leaving rings of pentagons and heptagons (the torus by Method 2 at 2000 faces: 92 % valence 6, and
-// 100 % from the parabolic circle; the uploaded torus alike). The trials are then also ranked by their share
-// of interior vertices of valence 6 (kIrregularPrice per unit missing), which coverage and invalid stars do
-// not see.
+// 100 % from the parabolic circle; the uploaded torus alike). It replaces the best of the others where it
+// ranks higher with their share of interior vertices of valence 6 counted too (kIrregularPrice per unit
+// missing), which coverage and invalid stars do not see.
 constexpr double kParabolicStart = 0.1;
 constexpr int kParabolicSamples = 1000;  // a 32 x 32 grid on a parametric surface: within 6 degrees of the circle
 constexpr double kIrregularPrice = 1.0;
@@ -254,38 +254,41 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
     const double irregular = t.systems > 1 ? 0.0 : 1 - check.regularFraction;
     return Trial{plain - kIrregularPrice * irregular, plain, double(t.mesh.V.rows()), t.systems};
   };
-  // Every candidate laid along trial.base; the best start, its score and vertex count, by the score with the
-  // price of irregular vertices (`ranked`) and without it (`plain`). The middle of the bounds (the first
-  // candidate) keeps the start unless another is clearly better: at a quarter of the size small differences
-  // are noise.
+  // Every candidate laid along trial.base; the best start, its score and vertex count. The middle of the
+  // bounds (the first candidate) keeps the start unless another is clearly better: at a quarter of the size
+  // small differences are noise.
   struct Best {
     std::optional<Vec3> start;
     double score = -std::numeric_limits<double>::infinity(), vertices = 0;
     int systems = 0;
+    double rank = score;  // the score less the price of irregular vertices
   };
-  struct Bests {
-    Best ranked, plain;
-  };
-  auto consider = [&](const Vec3& c, Bests& b) {
+  auto consider = [&](const Vec3& c, Best& b) {
     trial.start = c;
     const auto s = score();
-    if (!s) return;
+    if (!s) return std::optional<Best>();
     ++laid;
     const double handicap = c == candidates.front() ? 0.0 : 0.05;
-    if (s->rank - handicap > b.ranked.score) b.ranked = {c, s->rank - handicap, s->vertices, s->systems};
-    if (s->plain - handicap > b.plain.score) b.plain = {c, s->plain - handicap, s->vertices, s->systems};
+    const Best mine{c, s->plain - handicap, s->vertices, s->systems, s->rank - handicap};
+    if (mine.score > b.score) b = mine;
+    return std::optional<Best>(mine);
   };
   auto bestStart = [&]() {
-    Bests b;
+    Best b;
     for (const Vec3& c : candidates) consider(c, b);
     return b;
   };
-  Bests firstFamily = bestStart();
-  // The bumps' lays take several systems of rows from every start, and one from their parabolic rings laid
-  // fewer hexagons at 2000-4000 faces (0.81 -> 0.76) and more at 5000-13000: not tried there. Nor by Method
-  // 1, whose ideal step explodes along a base curve on a parabolic curve: on the torus its rows from there
-  // left 1-5 invalid stars from 5000 faces on, and the counts followed the cell poorly (8503 faces for 10k).
-  if (firstFamily.ranked.systems == 1 && options.method == LayingMethod::Prespecified &&
+  Best best = bestStart();
+  const bool poor = best.score < kPoorTrial;
+  // The start on a parabolic curve replaces the best where it ranks higher with the price of irregular
+  // vertices. Not on the bumps, whose lays take several systems of rows from every start (one from their
+  // parabolic rings laid fewer hexagons at 2000-4000 faces, 0.81 -> 0.76, and more at 5000-13000), nor by
+  // Method 1, whose ideal step explodes along a base curve on a parabolic curve (on the torus its rows from
+  // there left 1-5 invalid stars from 5000 faces on, and the counts followed the cell poorly). The three
+  // other candidates are still ranked as before: ranked by irregular vertices too, the uploaded cyclide at
+  // 1500 faces started from its outer equator instead, with 96 % hexagons for 91 % but its farthest node at
+  // 0.38 % of the diagonal for 0.14 %.
+  if (best.systems == 1 && options.method == LayingMethod::Prespecified &&
       most.gaussianCurvature() - least.gaussianCurvature() > 0) {  // not a developable, parabolic throughout
     std::optional<Vec3> parabolic;
     double lowest = kParabolicStart;
@@ -295,21 +298,15 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
       const double ratio = std::min(a, b) / kmax;
       if (ratio < lowest) lowest = ratio, parabolic = g.point;
     }
-    if (parabolic) consider(*parabolic, firstFamily);
+    Best ignored;
+    const std::optional<Best> there = parabolic ? consider(*parabolic, ignored) : std::nullopt;
+    if (there && there->rank > best.rank) best = *there;
   }
-  Best best = firstFamily.ranked;
-  // Only when the family along the zero-curvature direction leaves much of the surface uncovered or invalid
-  // (a score below kPoorTrial) is the other family tried, from every candidate: on surfaces whose network
-  // contains the parabolic curves it costs no lay. On such a surface the half-size trials predict the full
-  // lay poorly (a laying that covers 44 % at half the size may cover 28 % at full size), so the two
-  // families' best starts are then laid once more at full size, and the better of those decides.
   bool otherFamily = false;
-  if (firstFamily.plain.score < kPoorTrial && best.start &&
-      (choice.base == BaseFamily::First || choice.base == BaseFamily::Conjugate)) {
-    best = firstFamily.plain;  // coverage and validity decide here, as between the families below
+  if (poor && best.start && (choice.base == BaseFamily::First || choice.base == BaseFamily::Conjugate)) {
     const BaseFamily rule = choice.base, other = rule == BaseFamily::First ? BaseFamily::Conjugate : BaseFamily::First;
     trial.base = other;
-    const Best alternative = bestStart().plain;
+    const Best alternative = bestStart();
     if (alternative.start) {
       const double trialCell = trial.cell;
       trial.cell = options.cell;
