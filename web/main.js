@@ -277,7 +277,8 @@ function showStats({ metrics, solve, timings, method, field, triangulation, dual
   $('iterations').textContent = `${solve.iterations}${solve.converged ? '' : ' (not converged)'}${
     solve.boundaryPanelsSplit ? `, ${solve.boundaryPanelsSplit} boundary panel${solve.boundaryPanelsSplit > 1 ? 's' : ''} split` : ''}${
     solve.interiorFacesSplit ? `, ${solve.interiorFacesSplit} interior face${solve.interiorFacesSplit > 1 ? 's' : ''} split` : ''}${
-    duality === 'tangent' && $('duality').value === 'auto' ? ', from the tangent dual' : ''}`;
+    duality === 'tangent' && $('duality').value === 'auto' ? ', from the tangent dual' : ''}${
+    solve.foldsAllowed ? ', solved without the fold guard (none left folded)' : ''}`;
   $('timings').textContent = Object.entries(timings)
     .filter(([stage]) => stage !== 'total')
     .map(([stage, t]) => `${stage} ${ms(t)}`)

@@ -201,7 +201,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"dualityUsed", phex::dualityName(r.duality)},
           {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
                       {"boundaryPanelsSplit", r.boundaryPanelsSplit}, {"interiorFacesSplit", r.interiorFacesSplit},
-                      {"log", log}}},
+                      {"foldsAllowed", r.foldsAllowed}, {"log", log}}},
           {"surfaceFit", {{"applied", r.solve.surfaceFitted}, {"distanceBefore", r.solve.surfaceDistanceBefore},
                           {"distanceAfter", r.solve.surfaceDistanceAfter}, {"freeNodesSettled", r.solve.freeNodesSettled}}},
           {"milliseconds", timings},

@@ -240,6 +240,27 @@ TEST_CASE("pipeline: on a ring, Method 2 starts on a parabolic circle and lays e
   }
 }
 
+TEST_CASE("pipeline: a guarded solve that stalls is run unguarded, and kept where no face crosses itself") {
+  // Method 1 on a cyclide patch past its parabolic circles: the fold guard stalled the solve at 3.5e-3 from
+  // both duals (the faces there only pass through crossed shapes on their way to planar ones); unguarded it
+  // converges with no face crossing itself.
+  PipelineParams p;
+  p.surface = "cyclide";
+  p.surfaceParams = {{"uSpan", 180}, {"vSpan", 240}};
+  p.method = TriangulationMethod::Progressive;
+  p.faces = 1500;
+  const PipelineResult r = runPipeline(p);
+  INFO("planarity " << r.metrics.planarityMax << ", crossing " << r.metrics.selfIntersectingCount);
+  CHECK(r.foldsAllowed);
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+  // A solve the guard does not stall keeps it.
+  PipelineParams torus;
+  torus.faces = 500;
+  CHECK_FALSE(runPipeline(torus).foldsAllowed);
+}
+
 TEST_CASE("pipeline: on a surface laid in several systems, every face only folding would make planar is cut") {
   // The bumps at 1000 faces: along the seams and where rows run along the parabolic rings, some 30 interior
   // faces stall off planar (the solve stopped at planarity 1e-3 before); each is cut along its best diagonal,

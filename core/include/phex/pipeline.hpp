@@ -98,6 +98,10 @@ struct PipelineResult {
   PlanarizeReport solve;
   int boundaryPanelsSplit = 0;  // boundary panels cut in two to become planar (PipelineParams::splitBoundaryPanels)
   int interiorFacesSplit = 0;   // interior faces cut in two the same way (only folding would make them planar)
+  // The solve that was kept ran without the fold guard (PipelineParams::preventFolds): the guarded one stalled
+  // short of the tolerance, and without it the mesh converged with no face crossing itself — the way to
+  // planarity passed through steps the guard refused (Method 1 on cyclide patches past the parabolic circles).
+  bool foldsAllowed = false;
   std::vector<StageTiming> timings;
   double totalMilliseconds = 0.0;
 };
