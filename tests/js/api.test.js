@@ -26,6 +26,7 @@ test('the default torus is a planar, valid, hexagon mesh', () => {
   const { hex, metrics, solve, timings } = torus;
   assert.ok(metrics.planarityMax <= 1e-9, `planarity max ${metrics.planarityMax}`);
   assert.ok(solve.converged);
+  assert.equal(solve.foldsAllowed, false); // the fold guard never stalled it
   assert.equal(metrics.selfIntersectingCount, 0);
   // Progressive conjugation closes the torus with a zipper row: a few non-hexagons where counts differ.
   assert.ok(metrics.facesBySize['6'] >= 0.9 * metrics.faceCount, JSON.stringify(metrics.facesBySize));
