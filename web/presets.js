@@ -11,9 +11,9 @@ export const PRESETS = {
   'Fig. 11 hyperboloid, valid (K < 0)': {
     params: { surface: 'hyperboloid', faces: 1500 },
   },
-  // The patch spans the elliptic part around the outer equator: Method 1 on a patch reaching past the parabolic
-  // circles (vSpan 200 or more) lays fronts along them whose Dupin dual no solve makes planar (it stalls at
-  // 1e-3 .. 1e-2; a known shortfall, see the README), where Method 2 converges on every span.
+  // The patch spans the elliptic part around the outer equator: on a patch reaching past the parabolic
+  // circles (vSpan 200 or more) Method 1 converges only without the fold guard, leaving invalid stars and
+  // faces cut (a known shortfall, see the README), where Method 2 lays every span cleanly.
   'Fig. 15 cyclide patch, progressive': {
     params: { surface: 'cyclide', surfaceParams: { uSpan: 180, vSpan: 120 }, faces: 1500, method: 'progressive' },
   },
