@@ -752,6 +752,16 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     clock.done("planarize");
     return stalledCuts;
   };
+  // Another solve's dual, meshes and counts into `r`.
+  auto takeSolve = [&](PipelineResult&& t) {
+    r.duality = t.duality;
+    r.dual = std::move(t.dual);
+    r.initial = std::move(t.initial);
+    r.hex = std::move(t.hex);
+    r.solve = std::move(t.solve);
+    r.boundaryPanelsSplit = t.boundaryPanelsSplit;
+    r.interiorFacesSplit = t.interiorFacesSplit;
+  };
   const Duality asked = params.duality == Duality::Auto ? Duality::Dupin : params.duality;
   const bool dupinStalled = solveFrom(r, asked, dualOf(asked));
   // Where the solve from the Dupin dual stalls short of the tolerance or leaves faces crossing themselves,
@@ -782,15 +792,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
           : t.solve.converged != r.solve.converged           ? t.solve.converged
           : t.solve.converged && t.interiorFacesSplit != r.interiorFacesSplit ? t.interiorFacesSplit < r.interiorFacesSplit
                                                              : t.solve.planarityMax < r.solve.planarityMax;
-      if (better) {
-        r.duality = Duality::Tangent;
-        r.dual = std::move(t.dual);
-        r.initial = std::move(t.initial);
-        r.hex = std::move(t.hex);
-        r.solve = std::move(t.solve);
-        r.boundaryPanelsSplit = t.boundaryPanelsSplit;
-        r.interiorFacesSplit = t.interiorFacesSplit;
-      }
+      if (better) takeSolve(std::move(t));
     }
   }
 
@@ -809,13 +811,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     po.preventFolds = true;
     const std::size_t uncut = static_cast<std::size_t>(t.hex.faceCount() - t.interiorFacesSplit - t.boundaryPanelsSplit);
     if (t.solve.converged && crossing(t.hex) == 0 && static_cast<std::size_t>(t.interiorFacesSplit) <= uncut / kSeamShare) {
-      r.duality = t.duality;
-      r.dual = std::move(t.dual);
-      r.initial = std::move(t.initial);
-      r.hex = std::move(t.hex);
-      r.solve = std::move(t.solve);
-      r.boundaryPanelsSplit = t.boundaryPanelsSplit;
-      r.interiorFacesSplit = t.interiorFacesSplit;
+      takeSolve(std::move(t));
       r.foldsAllowed = true;
     }
   }
