@@ -207,6 +207,14 @@ std::optional<Vec3> DirectionField::direction(const SurfacePoint& p, Family fami
   std::optional<Vec3> d = first(p);
   const bool umbilic = isUmbilic(g);
   bool anyIsFine = !d && (spec_.kind == FieldKind::Principal || spec_.kind == FieldKind::Angle);
+  // The conjugate direction of v, or nullopt at a parabolic point, where the zero-curvature direction is
+  // conjugate to every direction (§5.3).
+  auto conjugateOf = [&](const Vec3& v) -> std::optional<Vec3> {
+    // Principal directions (all, at an umbilic) are conjugate and orthogonal.
+    if (spec_.kind == FieldKind::Principal || umbilic) return Vec3(g.normal.cross(v));
+    const std::optional<Vec2> c = conjugateDirection(g, tangentVector(g, v));
+    return c ? std::optional<Vec3>(spatialVector(g, *c)) : std::nullopt;
+  };
   if (d && spec_.kind == FieldKind::Principal && previous) {
     // Curvature lines by continuity, not by label: where k1 and k2 cross (an umbilic curve, e.g. on a surface
     // of revolution) d1 and d2 swap, and a line following d1 would turn by 90 degrees. The same across an
@@ -219,30 +227,15 @@ std::optional<Vec3> DirectionField::direction(const SurfacePoint& p, Family fami
     // turned principal directions (or their conjugates) the one nearer the line's own direction is followed.
     // The vase laid along angle:90 or angle:0 met its umbilic circle in the belly and gave up there, with
     // rows along the asymptotic direction, where "principal" (followed by continuity) lays it whole.
-    const Vec3 other = g.normal.cross(*d);
-    std::optional<Vec3> candidates[2] = {d, other};
+    std::optional<Vec3> candidates[2] = {d, Vec3(g.normal.cross(*d))};
     if (family == Family::Conjugate)
-      for (std::optional<Vec3>& c : candidates) {
-        if (umbilic) {
-          c = g.normal.cross(*c);
-        } else {
-          const std::optional<Vec2> conjugate = conjugateDirection(g, tangentVector(g, *c));
-          c = conjugate ? std::optional<Vec3>(spatialVector(g, *conjugate)) : std::nullopt;
-        }
-      }
+      for (std::optional<Vec3>& c : candidates) c = conjugateOf(*c);
     auto nearness = [&](const std::optional<Vec3>& c) { return c ? std::abs(c->dot(*previous)) : -1.0; };
     d = nearness(candidates[1]) > nearness(candidates[0]) ? candidates[1] : candidates[0];
-    // §5.3: at a parabolic point the zero-curvature direction is conjugate to every direction.
     anyIsFine = !d;
   } else if (d && family == Family::Conjugate) {
-    if (spec_.kind == FieldKind::Principal || umbilic) {
-      d = g.normal.cross(*d);  // principal directions (all, at an umbilic) are conjugate and orthogonal
-    } else {
-      const std::optional<Vec2> c = conjugateDirection(g, tangentVector(g, *d));
-      // §5.3: at a parabolic point the zero-curvature direction is conjugate to every direction.
-      anyIsFine = !c;
-      d = c ? std::optional<Vec3>(spatialVector(g, *c)) : std::nullopt;
-    }
+    d = conjugateOf(*d);
+    anyIsFine = !d;
   }
   if (!d && anyIsFine && previous) d = tangentUnit(g, *previous);
   if (d && previous && d->dot(*previous) < 0) *d = -*d;
