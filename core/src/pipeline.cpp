@@ -569,10 +569,14 @@ struct PanelCut {
   bool resolve = false;
   bool stalledRule = false;  // interior faces were cut only because the solve stalled (kStalledShare)
 };
+// The faces of `r` before any cut (each cut made one face two).
+std::size_t facesBeforeCuts(const PipelineResult& r) {
+  return static_cast<std::size_t>(r.hex.faceCount() - r.interiorFacesSplit - r.boundaryPanelsSplit);
+}
 PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingOnly, bool seams, bool stalled) {
   // The faces before any cut, and the interior faces cut so far: the seams' and the stall's cuts are budgeted
   // over all rounds together.
-  const std::size_t uncut = static_cast<std::size_t>(r.hex.faceCount() - r.interiorFacesSplit - r.boundaryPanelsSplit);
+  const std::size_t uncut = facesBeforeCuts(r);
   const std::size_t cutSoFar = static_cast<std::size_t>(r.interiorFacesSplit);
   std::vector<char> cut(r.hex.faceCount(), 0), crossing(r.hex.faceCount(), 0), held(r.hex.V.rows(), 0);
   std::vector<int> interiorOff;
@@ -809,8 +813,8 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     PipelineResult t;
     solveFrom(t, asked, dualOf(asked));
     po.preventFolds = true;
-    const std::size_t uncut = static_cast<std::size_t>(t.hex.faceCount() - t.interiorFacesSplit - t.boundaryPanelsSplit);
-    if (t.solve.converged && crossing(t.hex) == 0 && static_cast<std::size_t>(t.interiorFacesSplit) <= uncut / kSeamShare) {
+    if (t.solve.converged && crossing(t.hex) == 0 &&
+        static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare) {
       takeSolve(std::move(t));
       r.foldsAllowed = true;
     }
