@@ -189,7 +189,7 @@ constexpr double kPoorTrial = 0.8;  // a trial score (coverage minus 5x the bad 
 // ranks higher with their share of interior vertices of valence 6 counted too (kIrregularPrice per unit
 // missing), which coverage and invalid stars do not see.
 constexpr double kParabolicStart = 0.1;
-constexpr int kParabolicSamples = 1000;  // a 32 x 32 grid on a parametric surface: within 6 degrees of the circle
+constexpr int kParabolicStartSamples = 1000;  // a 32 x 32 grid on a parametric surface: within 6 degrees of the circle
 constexpr double kIrregularPrice = 1.0;
 
 // The most nearly umbilic of some 400 samples of the surface (relative k1 - k2 under kNearUmbilic) where it
@@ -292,7 +292,7 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
       most.gaussianCurvature() - least.gaussianCurvature() > 0) {  // not a developable, parabolic throughout
     std::optional<Vec3> parabolic;
     double lowest = kParabolicStart;
-    for (const LocalGeometry& g : surface.samples(kParabolicSamples)) {
+    for (const LocalGeometry& g : surface.samples(kParabolicStartSamples)) {
       const double a = std::abs(g.k1), b = std::abs(g.k2), kmax = std::max(a, b);
       if (!(kmax > 0)) continue;
       const double ratio = std::min(a, b) / kmax;
