@@ -241,12 +241,12 @@ TEST_CASE("pipeline: on a ring, Method 2 starts on a parabolic circle and lays e
 }
 
 TEST_CASE("pipeline: a guarded solve that stalls is run unguarded, and kept where no face crosses itself") {
-  // Method 1 on a cyclide patch past its parabolic circles: the fold guard stalled the solve at 3.5e-3 from
+  // Method 1 on a cyclide patch past its parabolic circles: the fold guard stalls the solve (about 1e-3) from
   // both duals (the faces there only pass through crossed shapes on their way to planar ones); unguarded it
   // converges with no face crossing itself.
   PipelineParams p;
   p.surface = "cyclide";
-  p.surfaceParams = {{"uSpan", 180}, {"vSpan", 240}};
+  p.surfaceParams = {{"uSpan", 180}, {"vSpan", 260}};
   p.method = TriangulationMethod::Progressive;
   p.faces = 1500;
   const PipelineResult r = runPipeline(p);
@@ -348,11 +348,11 @@ TEST_CASE("pipeline: the uploaded bumps are laid without rows fanned across a re
 }
 
 TEST_CASE("pipeline: a boundary panel left off planar is cut in two, and the solve reaches the tolerance") {
-  // On the helicoid at 5000 faces a few boundary panels where rows reach the rims have no planar shape that
-  // does not fold; every interior face becomes planar.
+  // On the helicoid laid at cell 0.043 (about 3800 faces) a few boundary panels where rows reach the rims have
+  // no planar shape that does not fold; every interior face becomes planar.
   PipelineParams p;
   p.surface = "helicoid";
-  p.faces = 5000;
+  p.cell = 0.043;
   p.splitBoundaryPanels = false;
   const PipelineResult whole = runPipeline(p);
   INFO("whole: planarity " << whole.metrics.planarityMax);
