@@ -691,6 +691,7 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
   // faces folded 21 (0.204 % left, 0.181 % now).
   constexpr int kRefreezes = 4;
   int lastFolded = std::numeric_limits<int>::max();
+  Eigen::VectorXd folding;  // the latest placement that came closer to the surface but folded faces
   for (int attempt = 0;; ++attempt) {
     if (attempt > 0) {
       mesh.V = x0;
@@ -766,6 +767,7 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
       fit.after = distance;
       return fit;
     }
+    folding = best;
     // First without solving again: the shifts of the faces around each folded face are undone (any shifts
     // keep every face planar), the ring growing while faces still fold.
     if (attempt == 0) {
@@ -810,6 +812,21 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
     for (int v = 0; v < nv; ++v)
       for (int k = start[v]; k < start[v + 1]; ++k)
         if (frozen[faces[k]]) G[k].setZero();
+  }
+  // Where no refreeze unfolds them, shorter shifts of every plane. On an uploaded cyclide at 1500 faces the
+  // faces that fold are thin ones in a column across the rows, 35 cells from the farthest node: freezing
+  // them moved the fold to the next row each time, and undoing the shifts around them folded more; with shorter
+  // shifts none folds, and the farthest node went 0.26 % -> 0.17 % of the diagonal.
+  for (double share : {0.75, 0.5, 0.375, 0.25, 0.125}) {
+    if (folding.size() != nf) break;
+    place(share * folding);
+    const int folded = selfIntersecting();
+    const double d = footPoints();
+    if (folded <= foldedBefore && d < fit.before) {
+      fit.applied = true;
+      fit.after = d;
+      return fit;
+    }
   }
   mesh.V = x0;
   fit.after = fit.before;
