@@ -68,6 +68,31 @@ TEST_CASE("surfaces: every surface is regular with an orthonormal right-handed p
   }
 }
 
+TEST_CASE("surfaces: d1 and d2 are principal: normal curvatures k1 and k2, and II(d1, d2) = 0") {
+  // The second fundamental form at (u, v) along tangent t, from the jet: t = a Pu + b Pv solved in the
+  // tangent plane, II(s, t) = -(s_a t_a Puu + (s_a t_b + s_b t_a) Puv + s_b t_b Pvv) . n.
+  for (const SurfaceSpec& spec : analyticSurfaces()) {
+    const ParametricSurfacePtr s = makeSurface(spec.name);
+    for (const Vec2& uv : samples(*s)) {
+      const ParametricSurface::Jet j = s->jet(uv.x(), uv.y());
+      const LocalGeometry g = s->geometryAt(uv.x(), uv.y());
+      Eigen::Matrix<double, 3, 2> J;
+      J << j.Pu, j.Pv;
+      auto coefficients = [&](const Vec3& t) { return Eigen::Vector2d(J.colPivHouseholderQr().solve(t)); };
+      auto II = [&](const Vec3& x, const Vec3& y) {
+        const Eigen::Vector2d a = coefficients(x), b = coefficients(y);
+        return -(a.x() * b.x() * j.Puu + (a.x() * b.y() + a.y() * b.x()) * j.Puv + a.y() * b.y() * j.Pvv).dot(g.normal);
+      };
+      const double scale = std::max({1.0, std::abs(g.k1), std::abs(g.k2)});
+      INFO(spec.name << " at (" << uv.x() << ", " << uv.y() << "): k1 " << g.k1 << ", k2 " << g.k2);
+      CHECK(g.k1 >= g.k2);
+      CHECK(std::abs(II(g.d1, g.d1) - g.k1) < 1e-9 * scale);
+      CHECK(std::abs(II(g.d2, g.d2) - g.k2) < 1e-9 * scale);
+      CHECK(std::abs(II(g.d1, g.d2)) < 1e-9 * scale);
+    }
+  }
+}
+
 TEST_CASE("surfaces: closest point of a point off the surface along the normal is the foot") {
   for (const SurfaceSpec& spec : analyticSurfaces()) {
     const ParametricSurfacePtr s = makeSurface(spec.name);
