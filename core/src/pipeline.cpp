@@ -804,8 +804,8 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // A guarded solve that stalled may reach the tolerance unguarded with no face left crossing itself: the
   // guard refuses every step that would make a simple face cross itself, also where the faces only pass
   // through such a shape on their way to planar ones. Method 1 on a cyclide patch past its parabolic circles
-  // (uSpan 180, vSpan 240, 1500 faces) stalled at 3.5e-3 from both duals; unguarded it converges to 6e-14
-  // with none crossing itself (72 interior faces cut of 1363). Kept only then, and where the faces it cut
+  // (uSpan 180, vSpan 260, 1500 faces: the test) stalls from both duals; unguarded it converges to 3e-13
+  // with none crossing itself (73 interior faces cut, 1568 faces in all). Kept only then, and where the faces it cut
   // (every one that folded) stay within one in kSeamShare (`foldsAllowed`); else the guarded result stands,
   // and says that it missed: Method 1 forced onto a cone cut 1865 of 697, and the torus laid across its
   // parabolic circles (Fig. 19's infeasible direction) 143 of 925. Ceres solvers have no guard.

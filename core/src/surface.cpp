@@ -78,18 +78,18 @@ Vec2 ParametricSurface::project(const Vec3& p, Vec2 uv) const {
     Eigen::Matrix2d H;
     H << j.Pu.dot(j.Pu) + j.Puu.dot(r), j.Pu.dot(j.Pv) + j.Puv.dot(r), j.Pu.dot(j.Pv) + j.Puv.dot(r),
         j.Pv.dot(j.Pv) + j.Pvv.dot(r);
-    // A symmetric 2 x 2 system, solved in closed form.
-    auto solve = [&g](const Eigen::Matrix2d& A) {
+    // The step -A^-1 g for a symmetric 2 x 2 A, in closed form.
+    auto stepFor = [&g](const Eigen::Matrix2d& A) {
       const double det = A(0, 0) * A(1, 1) - A(0, 1) * A(0, 1);
       return Eigen::Vector2d(-(A(1, 1) * g.x() - A(0, 1) * g.y()) / det, -(A(0, 0) * g.y() - A(0, 1) * g.x()) / det);
     };
     Eigen::Vector2d step;
     if (H.determinant() > 0 && H(0, 0) > 0) {
-      step = solve(H);
+      step = stepFor(H);
     } else {
       Eigen::Matrix2d I;
       I << j.Pu.dot(j.Pu), j.Pu.dot(j.Pv), j.Pu.dot(j.Pv), j.Pv.dot(j.Pv);
-      step = solve(I);  // Gauss-Newton step
+      step = stepFor(I);  // Gauss-Newton step
     }
     if (!step.allFinite()) break;
     const Vec2 next = normalize(uv + step);

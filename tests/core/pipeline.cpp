@@ -241,9 +241,9 @@ TEST_CASE("pipeline: on a ring, Method 2 starts on a parabolic circle and lays e
 }
 
 TEST_CASE("pipeline: a guarded solve that stalls is run unguarded, and kept where no face crosses itself") {
-  // Method 1 on a cyclide patch past its parabolic circles: the fold guard stalls the solve (about 1e-3) from
-  // both duals (the faces there only pass through crossed shapes on their way to planar ones); unguarded it
-  // converges with no face crossing itself.
+  // Method 1 on a cyclide patch past its parabolic circles: the fold guard stalls the solve from both duals
+  // (the faces there only pass through crossed shapes on their way to planar ones); unguarded it converges
+  // with no face crossing itself.
   PipelineParams p;
   p.surface = "cyclide";
   p.surfaceParams = {{"uSpan", 180}, {"vSpan", 260}};
