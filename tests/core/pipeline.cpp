@@ -278,14 +278,23 @@ TEST_CASE("pipeline: on a surface laid in several systems, every face only foldi
   CHECK(r.interiorFacesSplit > 8);  // more than the few cut on a surface of one system
   CHECK(r.interiorFacesSplit < 0.05 * r.hex.faceCount());
   CHECK(r.interiorHexagonFraction > 0.7);
-  // Within the goal: the surface fit folded 21 faces at first and is kept once the shifts around them are
-  // undone (0.181 %; the fit was dropped whole before, 0.204 %). The same natively and in wasm.
+  // The surface fit folds 32 faces at first; shorter shifts of every plane fold none and are kept. This
+  // coarse the bumps' panels stay 0.2-0.3 % of the diagonal off at 800-1200 faces (0.21 % here): the farthest
+  // node sits where the shifts fold faces. At 1500 faces the goal is met (below).
   CHECK(r.solve.surfaceFitted);
-  CHECK(r.metrics.surfaceDistanceMax <= 0.002);
+  CHECK(r.metrics.surfaceDistanceMax <= 0.0025);
   p.splitBoundaryPanels = false;
   const PipelineResult whole = runPipeline(p);
   CHECK_FALSE(whole.solve.converged);
   CHECK(whole.metrics.planarityMax > 1e-6);
+  // At 1500 faces the fit folds faces too and is kept once the shifts around them are undone: within the
+  // goal (0.146 %). The same natively and in wasm.
+  p.splitBoundaryPanels = true;
+  p.faces = 1500;
+  const PipelineResult finer = runPipeline(p);
+  CHECK(finer.solve.converged);
+  CHECK(finer.solve.surfaceFitted);
+  CHECK(finer.metrics.surfaceDistanceMax <= 0.002);
 }
 
 TEST_CASE("pipeline: a surface with umbilics is laid in several systems, and the note names one") {
