@@ -5,6 +5,7 @@
 #include <emscripten/val.h>
 
 #include <phex/error.hpp>
+#include <phex/panels.hpp>
 #include <phex/pipeline.hpp>
 
 #include <malloc.h>
@@ -331,6 +332,65 @@ val surfacePreview(val params) {
   });
 }
 
+// A polygon mesh from {positions, faceOffsets, faceIndices} (typed arrays or arrays of numbers), as run()
+// returns them. Shapes are checked here; ids and offsets by the core, which names the face.
+phex::PolyMesh polyMeshFromJs(const val& o) {
+  if (o.typeOf().as<std::string>() != "object" || o.isNull())
+    throw phex::Error(phex::ErrorCode::InvalidInput, "mesh must be an object {positions, faceOffsets, faceIndices}");
+  for (const char* key : {"positions", "faceOffsets", "faceIndices"})
+    if (!has(o, key) || !o[key]["length"].isNumber())
+      throw phex::Error(phex::ErrorCode::InvalidInput, std::string("mesh.") + key + " must be an array or typed array");
+  const std::vector<double> positions = emscripten::convertJSArrayToNumberVector<double>(o["positions"]);
+  if (positions.size() % 3 != 0)
+    throw phex::Error(phex::ErrorCode::InvalidInput, "mesh.positions has " + std::to_string(positions.size()) +
+                                                         " numbers, not a multiple of 3");
+  const std::vector<double> offsets = emscripten::convertJSArrayToNumberVector<double>(o["faceOffsets"]);
+  const std::vector<double> indices = emscripten::convertJSArrayToNumberVector<double>(o["faceIndices"]);
+  auto id = [](double x, const char* what) {
+    if (!(x >= 0 && x <= 2e9) || x != std::floor(x))
+      throw phex::Error(phex::ErrorCode::InvalidInput, std::string("mesh.") + what + " holds " + std::to_string(x) +
+                                                           ", not an index");
+    return static_cast<int>(x);
+  };
+  phex::PolyMesh m;
+  m.V.resize(static_cast<Eigen::Index>(positions.size() / 3), 3);
+  for (std::size_t i = 0; i < positions.size(); ++i) m.V(static_cast<Eigen::Index>(i / 3), static_cast<Eigen::Index>(i % 3)) = positions[i];
+  m.offsets.clear();
+  for (double x : offsets) m.offsets.push_back(id(x, "faceOffsets"));
+  if (m.offsets.empty()) m.offsets.push_back(0);
+  for (double x : indices) m.indices.push_back(id(x, "faceIndices"));
+  return m;
+}
+
+// The faces of `mesh` laid flat for cutting: {ok, text} with options.format 'svg' (a cut sheet) or 'csv' (the
+// panel schedule); options.gap, width, unit and labels shape the sheet (phex::PanelSheetOptions).
+val panels(val mesh, val options) {
+  return guarded([&] {
+    phex::PanelSheetOptions sheet;
+    std::string format = "svg";
+    if (!options.isUndefined() && !options.isNull()) {
+      if (options.typeOf().as<std::string>() != "object")
+        throw phex::Error(phex::ErrorCode::InvalidParameter, "panel options must be an object");
+      if (has(options, "format")) format = text(options, "format");
+      if (has(options, "gap")) sheet.gap = number(options, "gap");
+      if (has(options, "width")) sheet.width = number(options, "width");
+      if (has(options, "unit")) sheet.unit = text(options, "unit");
+      if (has(options, "labels")) {
+        if (options["labels"].typeOf().as<std::string>() != "boolean")
+          throw phex::Error(phex::ErrorCode::InvalidParameter, "labels must be true or false");
+        sheet.labels = options["labels"].as<bool>();
+      }
+    }
+    if (format != "svg" && format != "csv")
+      throw phex::Error(phex::ErrorCode::InvalidParameter, "format must be 'svg' or 'csv' (got '" + format + "')");
+    const std::vector<phex::Panel> flat = phex::flattenPanels(polyMeshFromJs(mesh));
+    val out = val::object();
+    out.set("ok", true);
+    out.set("text", format == "svg" ? phex::panelsSvg(flat, sheet) : phex::panelsCsv(flat));
+    return out;
+  });
+}
+
 double heapBytes() { return static_cast<double>(emscripten::val::module_property("HEAPU8")["byteLength"].as<double>()); }
 
 // Bytes malloc has handed out and not taken back: flat across runs when nothing leaks.
@@ -345,5 +405,6 @@ EMSCRIPTEN_BINDINGS(phex) {
   emscripten::function("heapBytes", &heapBytes);
   emscripten::function("capabilities", &capabilities);
   emscripten::function("surfacePreview", &surfacePreview);
+  emscripten::function("panels", &panels);
   emscripten::function("mallocedBytes", &mallocedBytes);
 }

@@ -428,7 +428,8 @@ function setUpHover() {
       const q = last.quantities[view];
       const mesh = last.result[view];
       const rows = [
-        ['Face', `${face} (${mesh.faceOffsets[face + 1] - mesh.faceOffsets[face]} corners)`],
+        // P<n>: the label the panel export gives this face (1-based, as in OBJ).
+        ['Face', `${face} (${mesh.faceOffsets[face + 1] - mesh.faceOffsets[face]} corners)${view === 'hex' ? `, panel P${face + 1}` : ''}`],
         ['Planarity', fmt(q.get('planarity')[face])],
         ['Area', fmt(q.get('area')[face])],
         ['Convex', q.get('convexity')[face] ? 'yes' : 'no'],
@@ -481,6 +482,8 @@ const EXPORTS = {
   },
   'export-tri': () => download(meshToOBJ(last.result.triangulation), `${baseName()}-triangulation.obj`, 'text/plain'),
   'export-png': () => download(viewer.snapshot(), `${baseName()}.png`, 'image/png'),
+  'export-panels': async () => download(await phex.panels(last.result.hex), `${baseName()}-panels.svg`, 'image/svg+xml'),
+  'export-schedule': async () => download(await phex.panels(last.result.hex, { format: 'csv' }), `${baseName()}-panels.csv`, 'text/csv'),
 };
 
 // ---------------------------------------------------------------- start

@@ -3,6 +3,7 @@
 #include <phex/mesh_io.hpp>
 #include <phex/mesh_surface.hpp>
 #include <phex/pipeline.hpp>
+#include <phex/panels.hpp>
 
 #include <algorithm>
 #include <sys/resource.h>
@@ -75,6 +76,15 @@ Options of `phex run`:
   --out FILE                write the P-Hex mesh (for triangulate: the triangulation, OBJ)
   --format obj|ply|json     output format (default from the extension, else obj); json carries
                             the per-face metrics
+  --panels FILE.svg|.csv    write the faces laid flat, true to size, for cutting: an SVG sheet of
+                            outlines labelled P1..Pn (face n of the mesh, seen from its normal side)
+                            or the panel schedule as CSV (corners, area, perimeter, planarity, plane,
+                            edge lengths, corner angles, flat outline)
+  --panel-gap G             space between panels on the SVG sheet, in the mesh's units (default a
+                            quarter of the mean edge length)
+  --panel-width W           width of the SVG sheet (default: about square)
+  --panel-unit mm|cm|m|in   the mesh's length unit: the SVG sheet gets its true size for CAD and print
+                            (default none: viewers fit it to the window)
   --triangulation FILE.obj  write the triangulation as OBJ
   --initial FILE.obj        write the mesh before optimization as OBJ
   --report FILE.json        write counts, planarity, iterations and timings as JSON
@@ -240,7 +250,8 @@ phex::Vec3 parseVector(const std::string& opt, const std::string& text) {
 
 int run(const std::vector<std::string>& args, bool triangulateOnly) {
   phex::PipelineParams p;
-  std::string out, tri, initial, reportPath, format;
+  std::string out, tri, initial, reportPath, format, panels;
+  phex::PanelSheetOptions sheet;
   bool quiet = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
@@ -273,6 +284,10 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--split-boundary") p.splitBoundaryPanels = parseSwitch(a, value(), "on", "off");
     else if (a == "--out") out = value();
     else if (a == "--triangulation") tri = value();
+    else if (a == "--panels") panels = value();
+    else if (a == "--panel-gap") sheet.gap = parseNumber(a, value());
+    else if (a == "--panel-width") sheet.width = parseNumber(a, value());
+    else if (a == "--panel-unit") sheet.unit = value();
     else if (a == "--initial") initial = value();
     else if (a == "--report") reportPath = value();
     else if (a == "--format") format = value();
@@ -286,9 +301,18 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     format = ext == "ply" || ext == "json" ? ext : "obj";
   }
   if (format != "obj" && format != "ply" && format != "json") usage("--format must be obj, ply or json, got '" + format + "'");
+  const auto dot = panels.find_last_of('.');
+  const std::string panelFormat = dot == std::string::npos ? "" : panels.substr(dot + 1);
+  if (!panels.empty() && panelFormat != "svg" && panelFormat != "csv")
+    usage("--panels writes .svg or .csv, got '" + panels + "'");
+  if (!panels.empty() && triangulateOnly) usage("--panels needs phex run (a triangulation has no panels)");
+  if (!(sheet.gap >= 0)) usage("--panel-gap must be 0 or more");
+  if (!(sheet.width >= 0)) usage("--panel-width must be 0 or more");
+  if (!sheet.unit.empty() && sheet.unit != "mm" && sheet.unit != "cm" && sheet.unit != "m" && sheet.unit != "in")
+    usage("--panel-unit must be mm, cm, m or in, got '" + sheet.unit + "'");
   phex::validate(p);
   // Fail on an unwritable output before computing anything.
-  for (const std::string* path : {&out, &tri, &initial, &reportPath})
+  for (const std::string* path : {&out, &tri, &initial, &reportPath, &panels})
     if (!path->empty()) phex::writeTextFile(*path, "");
 
   phex::ProgressFn progress;
@@ -313,6 +337,10 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     phex::writeTextFile(out, format == "ply" ? phex::toPly(r.hex) : format == "json" ? meshJson(r).dump() : phex::toObj(r.hex));
   if (!tri.empty()) phex::writeTextFile(tri, phex::toObj(r.triangulation.mesh));
   if (!initial.empty()) phex::writeTextFile(initial, phex::toObj(r.initial));
+  if (!panels.empty()) {
+    const std::vector<phex::Panel> flat = phex::flattenPanels(r.hex);
+    phex::writeTextFile(panels, panelFormat == "svg" ? phex::panelsSvg(flat, sheet) : phex::panelsCsv(flat));
+  }
   const json rep = reportJson(p, r);
   if (!reportPath.empty()) phex::writeTextFile(reportPath, rep.dump(2) + "\n");
   std::cout << "faces " << r.metrics.faceCount << ", planarity max " << r.metrics.planarityMax << ", invalid faces "

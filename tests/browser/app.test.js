@@ -157,6 +157,14 @@ test('export PLY, JSON, glTF, the triangulation and a PNG', async () => {
 
   const png = await downloadOf('#export-png');
   assert.deepEqual([...png.data.subarray(1, 4)], [...Buffer.from('PNG')]);
+
+  // The panels laid flat: one labelled outline per face, and the schedule with one row per face.
+  const svg = await downloadOf('#export-panels');
+  assert.match(svg.name, /-panels\.svg$/);
+  assert.equal((svg.data.toString('utf8').match(/<polygon id="P\d+"/g) ?? []).length, faceCount);
+  const csv = (await downloadOf('#export-schedule')).data.toString('utf8').trimEnd().split('\n');
+  assert.match(csv[0], /^panel,corners,area/);
+  assert.equal(csv.length, faceCount + 1);
   assert.deepEqual(pageErrors, []);
 });
 
@@ -202,7 +210,11 @@ test('views, colour modes and the face tooltip', async () => {
   await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
   await page.mouse.move(box.x + box.width / 2 + 3, box.y + box.height / 2 + 2);
   await page.waitForSelector('#tooltip:not([hidden])', { timeout: 5000 });
-  assert.match(await page.textContent('#tooltip'), /Planarity/);
+  const tip = await page.textContent('#tooltip');
+  assert.match(tip, /Planarity/);
+  // The face's panel label, as on the cut sheet: face f is P(f + 1).
+  const [, face, panel] = tip.match(/Face: (\d+) \(\d+ corners\), panel P(\d+)/);
+  assert.equal(Number(panel), Number(face) + 1);
   assert.deepEqual(pageErrors, []);
 });
 

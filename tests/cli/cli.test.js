@@ -17,7 +17,7 @@ function phex(...args) {
 test('--help documents the commands and options', () => {
   const r = phex('--help');
   assert.equal(r.code, 0);
-  for (const word of ['run', 'curvature', 'surfaces', '--faces', '--cell', '--report', '--solver', '--duality']) {
+  for (const word of ['run', 'curvature', 'surfaces', '--faces', '--cell', '--report', '--solver', '--duality', '--panels']) {
     assert.ok(r.out.includes(word), `help mentions ${word}`);
   }
 });
@@ -67,12 +67,34 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--method', 'subdivision', '--surface', 'torus'], /control mesh/],
     [['triangulate', '--surface', 'teapot'], /unknown surface 'teapot'/],
     [['curvature', '--mesh', join(dir, 'missing.obj'), '--out', join(dir, 'c.csv')], /missing\.obj/],
+    [['run', '--panels', join(dir, 'p.dxf')], /--panels writes \.svg or \.csv/],
+    [['run', '--panels', join(dir, 'p.svg'), '--panel-gap', '-1'], /--panel-gap must be 0 or more/],
+    [['run', '--panels', join(dir, 'p.svg'), '--panel-unit', 'ft'], /--panel-unit must be mm, cm, m or in/],
+    [['triangulate', '--panels', join(dir, 'p.svg')], /--panels needs phex run/],
   ];
   for (const [args, pattern] of cases) {
     const r = phex(...args);
     assert.equal(r.code, 1, `${args.join(' ')} exits 1`);
     assert.match(r.err, pattern, args.join(' '));
   }
+});
+
+test('run --panels writes the faces laid flat: an SVG cut sheet and a CSV schedule, one per face', () => {
+  const report = join(dir, 'panels.json');
+  const svg = join(dir, 'panels.svg');
+  const csv = join(dir, 'panels.csv');
+  assert.equal(phex('run', '--surface', 'hyperboloid', '--faces', '600', '--panels', svg, '--panel-unit', 'm', '--report', report, '--quiet').code, 0);
+  assert.equal(phex('run', '--surface', 'hyperboloid', '--faces', '600', '--panels', csv, '--quiet').code, 0);
+  const faces = JSON.parse(readFileSync(report, 'utf8')).mesh.faces;
+  const sheet = readFileSync(svg, 'utf8');
+  assert.equal((sheet.match(/<polygon id="P\d+"/g) ?? []).length, faces);
+  assert.match(sheet, /<svg [^>]*width="[0-9.e+-]+mm"/);
+  const rows = readFileSync(csv, 'utf8').trimEnd().split('\n');
+  assert.equal(rows.length, faces + 1);
+  // K < 0 throughout: every hexagon is non-convex (§3), a corner angle over 180 degrees.
+  const hexagons = rows.slice(1).map((r) => r.split(',')).filter((c) => c[1] === '6');
+  assert.ok(hexagons.length > 0.8 * faces);
+  assert.ok(hexagons.every((c) => c[12].split(';').some((a) => Number(a) > 180)), 'a reflex corner in every hexagon');
 });
 
 test('curvature of an uploaded mesh keeps the vertex order; bad files are named', () => {

@@ -341,3 +341,65 @@ test('start and direction set where and which way the base curve runs; bad ones 
     assert.match(error.message, message);
   }
 });
+
+test('panels lays every face flat, true to size, as an SVG sheet or a CSV schedule; bad input is named', async () => {
+  const { hex, metrics } = torus;
+  const svg = await phex.panels(hex);
+  assert.match(svg, /^<\?xml/);
+  const ids = [...svg.matchAll(/<polygon id="P(\d+)"/g)].map((m) => Number(m[1]));
+  assert.deepEqual(ids, Array.from({ length: metrics.faceCount }, (_, i) => i + 1));
+  assert.equal((svg.match(/<text /g) ?? []).length, metrics.faceCount);
+  assert.doesNotMatch(svg, /<svg [^>]*width=/); // no unit: viewers fit the sheet
+  assert.match(await phex.panels(hex, { unit: 'mm', labels: false }), /<svg [^>]*width="[0-9.e+-]+mm"/);
+
+  const rows = (await phex.panels(hex, { format: 'csv' })).trimEnd().split('\n');
+  assert.equal(rows.length, metrics.faceCount + 1);
+  // Row f: its flat edges as long as the face's edges in space, its area the measured one.
+  const { positions, faceOffsets, faceIndices } = hex;
+  for (const f of [0, 7, metrics.faceCount - 1]) {
+    const cells = rows[f + 1].split(',');
+    assert.equal(cells[0], `P${f + 1}`);
+    const corners = Array.from(faceIndices.subarray(faceOffsets[f], faceOffsets[f + 1]));
+    assert.equal(Number(cells[1]), corners.length);
+    assert.ok(Math.abs(Number(cells[2]) - metrics.faceArea[f]) <= 1e-8 * metrics.faceArea[f], `area of P${f + 1}`);
+    const edges = cells[11].split(';').map(Number);
+    const outline = cells[13].split(';').map((xy) => xy.split(' ').map(Number));
+    corners.forEach((v, k) => {
+      const w = corners[(k + 1) % corners.length];
+      const inSpace = Math.hypot(...[0, 1, 2].map((a) => positions[3 * w + a] - positions[3 * v + a]));
+      const [x0, y0] = outline[k];
+      const [x1, y1] = outline[(k + 1) % corners.length];
+      assert.ok(Math.abs(edges[k] - inSpace) <= 1e-9 * inSpace);
+      assert.ok(Math.abs(Math.hypot(x1 - x0, y1 - y0) - inSpace) <= 1e-8 * inSpace, `flat edge ${k} of P${f + 1}`);
+    });
+  }
+
+  const failure = async (mesh, options) => {
+    try {
+      await phex.panels(mesh, options);
+    } catch (error) {
+      return error;
+    }
+    assert.fail('panels resolved');
+  };
+  let error = await failure(hex, { format: 'dxf' });
+  assert.ok(error instanceof PHexError);
+  assert.equal(error.code, 'invalid_parameter');
+  assert.match(error.message, /format/);
+  error = await failure(hex, { unit: 'ft' });
+  assert.equal(error.code, 'invalid_parameter');
+  error = await failure(hex, { gap: -1 });
+  assert.equal(error.code, 'invalid_parameter');
+  assert.match(error.message, /gap/);
+  const broken = { ...hex, faceIndices: Uint32Array.from(hex.faceIndices, (v, i) => (i === 8 ? 1e6 : v)) };
+  error = await failure(broken);
+  assert.equal(error.code, 'invalid_input');
+  assert.match(error.message, /face 1 \(P2\) names vertex 1000000/);
+  error = await failure({ positions: new Float64Array(4), faceOffsets: [0], faceIndices: [] });
+  assert.equal(error.code, 'invalid_input');
+  assert.match(error.message, /multiple of 3/);
+  error = await failure(null);
+  assert.equal(error.code, 'invalid_input');
+  // The instance keeps working.
+  assert.equal((await phex.panels(hex, { format: 'csv' })).trimEnd().split('\n').length, metrics.faceCount + 1);
+});

@@ -414,6 +414,20 @@ export interface SurfaceSpec {
   field: string;
 }
 
+/** How {@link PHex.panels} writes the panels. */
+export interface PanelOptions {
+  /** 'svg' (default): a cut sheet; 'csv': the panel schedule, one row per face. */
+  format?: 'svg' | 'csv';
+  /** Space between panels on the sheet, in the mesh's units (default a quarter of the mean edge length). */
+  gap?: number;
+  /** Width of the sheet in the mesh's units (default about square; never narrower than the widest panel). */
+  width?: number;
+  /** The mesh's length unit: the sheet then gets its true size in millimetres (default none: viewers fit it). */
+  unit?: 'mm' | 'cm' | 'm' | 'in';
+  /** Each panel's label at its centre (default true). */
+  labels?: boolean;
+}
+
 /** A loaded phex instance. */
 export interface PHex {
   /**
@@ -433,6 +447,14 @@ export interface PHex {
   surfacePreview(params: RunParams, options?: { signal?: AbortSignal }): Promise<SurfacePreview>;
   /** Memory of the wasm instance (in the worker, if any), measured between runs. */
   memory(): Promise<MemoryUse>;
+  /**
+   * The faces of a polygon mesh (a run's `hex`) laid flat, true to size, for cutting: with format 'svg' (the
+   * default) a cut sheet of outlines labelled P1..Pn (face n, seen from its normal side), with 'csv' the panel
+   * schedule (corners, area, perimeter, planarity, plane, edge lengths, corner angles, flat outline). Rejects
+   * with 'invalid_input' naming the face for a malformed or degenerate mesh, 'invalid_parameter' for bad
+   * options. Queued like run().
+   */
+  panels(mesh: Mesh, options?: PanelOptions): Promise<string>;
   /** Version of the phex core, e.g. "0.1.0". */
   readonly version: string;
   /** Stops the worker and frees the wasm instance; pending runs reject with code 'cancelled' and later calls fail. */

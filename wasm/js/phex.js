@@ -327,6 +327,23 @@ class PHex {
     return this.#enqueue(() => this.#backend.call('memory', []).then((value) => ({ ok: true, ...value })));
   }
 
+  /**
+   * The faces of a polygon mesh (a run's `hex`) laid flat, true to size, for cutting: an SVG cut sheet of
+   * outlines labelled P1..Pn (face n, seen from its normal side) or, with format 'csv', the panel schedule.
+   * Resolves to the text.
+   */
+  panels(mesh, { format = 'svg', gap, width, unit, labels } = {}) {
+    return new Promise((resolve) => {
+      if (format !== 'svg' && format !== 'csv') throw invalid(`format must be 'svg' or 'csv', got ${describe(format)}`);
+      if (gap !== undefined) checkNumber('gap', gap);
+      if (width !== undefined) checkNumber('width', width);
+      if (unit !== undefined && !['mm', 'cm', 'm', 'in'].includes(unit)) throw invalid(`unit must be 'mm', 'cm', 'm' or 'in', got ${describe(unit)}`);
+      if (labels !== undefined && typeof labels !== 'boolean') throw invalid(`labels must be true or false, got ${describe(labels)}`);
+      const options = Object.fromEntries(Object.entries({ format, gap, width, unit, labels }).filter(([, v]) => v !== undefined));
+      resolve(this.#enqueue(() => this.#backend.call('panels', [mesh, options])));
+    }).then((value) => value.text);
+  }
+
   dispose() {
     this.#disposed = true;
     this.#backend.dispose();

@@ -61,6 +61,9 @@ export async function loadEngine() {
     surfacePreview(params) {
       return answer(core.surfacePreview(params));
     },
+    panels(mesh, options) {
+      return answer(core.panels(mesh, options));
+    },
     /** Heap size, and the bytes malloc has handed out where the binding can tell (else null). */
     memory() {
       return {
@@ -84,7 +87,7 @@ function serve() {
     ({ version, surfaces, capabilities }) => postMessage({ type: 'ready', info: { version, surfaces, capabilities } }),
     (error) => postMessage({ type: 'failed', message: `could not load the phex wasm module: ${error?.message ?? error}` }),
   );
-  const METHODS = ['run', 'surfacePreview', 'memory'];
+  const METHODS = ['run', 'surfacePreview', 'memory', 'panels'];
   addEventListener('message', async ({ data }) => {
     if (data?.type !== 'call' || !METHODS.includes(data.method)) return;
     const engine = await ready;
