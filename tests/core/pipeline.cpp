@@ -278,17 +278,17 @@ TEST_CASE("pipeline: on a surface laid in several systems, every face only foldi
   CHECK(r.interiorFacesSplit > 8);  // more than the few cut on a surface of one system
   CHECK(r.interiorFacesSplit < 0.05 * r.hex.faceCount());
   CHECK(r.interiorHexagonFraction > 0.7);
-  // The surface fit folds 32 faces at first; shorter shifts of every plane fold none and are kept. This
-  // coarse the bumps' panels stay 0.2-0.3 % of the diagonal off at 800-1200 faces (0.21 % here): the farthest
-  // node sits where the shifts fold faces. At 1500 faces the goal is met (below).
+  // The surface fit folds 43 faces at first; shorter shifts of every plane fold none and are kept: 0.193 % of
+  // the diagonal. This coarse the goal is met narrowly: at 800, 900, 1050 and 1200 faces the bumps' panels
+  // stay 0.23-0.29 % off, the farthest node where the shifts fold faces (see the README).
   CHECK(r.solve.surfaceFitted);
-  CHECK(r.metrics.surfaceDistanceMax <= 0.0025);
+  CHECK(r.metrics.surfaceDistanceMax <= 0.002);
   p.splitBoundaryPanels = false;
   const PipelineResult whole = runPipeline(p);
   CHECK_FALSE(whole.solve.converged);
   CHECK(whole.metrics.planarityMax > 1e-6);
-  // At 1500 faces the fit folds faces too and is kept once the shifts around them are undone: within the
-  // goal (0.146 %). The same natively and in wasm.
+  // At 1500 faces the fit folds 17 faces and is kept once the shifts around them are undone: 0.146 %. The
+  // same natively and in wasm.
   p.splitBoundaryPanels = true;
   p.faces = 1500;
   const PipelineResult finer = runPipeline(p);
