@@ -362,9 +362,10 @@ phex::PolyMesh polyMeshFromJs(const val& o) {
   return m;
 }
 
-// The faces of `mesh` laid flat for cutting: {ok, text} with options.format 'svg' (a cut sheet) or 'csv' (the
-// panel schedule); options.gap, width, unit and labels shape the sheet (phex::PanelSheetOptions).
-val panels(val mesh, val options) {
+// Fabrication output of `mesh`: {ok, text} with options.format 'svg' (the faces laid flat on a cut sheet), 'csv'
+// (the panel schedule) or 'beams' (the beam schedule); options.gap, width, unit and labels shape the sheet
+// (phex::PanelSheetOptions).
+val fabrication(val mesh, val options) {
   return guarded([&] {
     phex::PanelSheetOptions sheet;
     std::string format = "svg";
@@ -381,12 +382,17 @@ val panels(val mesh, val options) {
         sheet.labels = options["labels"].as<bool>();
       }
     }
-    if (format != "svg" && format != "csv")
-      throw phex::Error(phex::ErrorCode::InvalidParameter, "format must be 'svg' or 'csv' (got '" + format + "')");
-    const std::vector<phex::Panel> flat = phex::flattenPanels(polyMeshFromJs(mesh));
+    if (format != "svg" && format != "csv" && format != "beams")
+      throw phex::Error(phex::ErrorCode::InvalidParameter, "format must be 'svg', 'csv' or 'beams' (got '" + format + "')");
+    const phex::PolyMesh m = polyMeshFromJs(mesh);
     val out = val::object();
     out.set("ok", true);
-    out.set("text", format == "svg" ? phex::panelsSvg(flat, sheet) : phex::panelsCsv(flat));
+    if (format == "beams") {
+      out.set("text", phex::beamsCsv(m));
+    } else {
+      const std::vector<phex::Panel> flat = phex::flattenPanels(m);
+      out.set("text", format == "svg" ? phex::panelsSvg(flat, sheet) : phex::panelsCsv(flat));
+    }
     return out;
   });
 }
@@ -405,6 +411,6 @@ EMSCRIPTEN_BINDINGS(phex) {
   emscripten::function("heapBytes", &heapBytes);
   emscripten::function("capabilities", &capabilities);
   emscripten::function("surfacePreview", &surfacePreview);
-  emscripten::function("panels", &panels);
+  emscripten::function("fabrication", &fabrication);
   emscripten::function("mallocedBytes", &mallocedBytes);
 }

@@ -484,6 +484,7 @@ const EXPORTS = {
   'export-png': () => download(viewer.snapshot(), `${baseName()}.png`, 'image/png'),
   'export-panels': async () => download(await phex.panels(last.result.hex), `${baseName()}-panels.svg`, 'image/svg+xml'),
   'export-schedule': async () => download(await phex.panels(last.result.hex, { format: 'csv' }), `${baseName()}-panels.csv`, 'text/csv'),
+  'export-beams': async () => download(await phex.beams(last.result.hex), `${baseName()}-beams.csv`, 'text/csv'),
 };
 
 // ---------------------------------------------------------------- start

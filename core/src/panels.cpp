@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <string>
+#include <utility>
 
 #include "phex/error.hpp"
 #include "phex/metrics.hpp"
@@ -231,6 +233,56 @@ std::string panelsCsv(const std::vector<Panel>& panels) {
     for (std::size_t k = 0; k < p.angles.size(); ++k) s += (k ? ";" : "") + num(p.angles[k]);
     s += ",";
     for (std::size_t k = 0; k < p.outline.size(); ++k) s += (k ? ";" : "") + num(p.outline[k].x()) + " " + num(p.outline[k].y());
+    s += "\n";
+  }
+  return s;
+}
+
+std::string beamsCsv(const PolyMesh& mesh) {
+  const std::vector<Panel> panels = flattenPanels(mesh);  // checks the mesh; gives each face's plane
+  struct Beam {
+    int a, b;             // nodes, in the direction the left face runs the edge
+    int left, right = -1;
+  };
+  std::vector<Beam> beams;
+  std::map<std::pair<int, int>, int> index;  // (min node, max node) -> beam
+  for (int f = 0; f < mesh.faceCount(); ++f) {
+    const int n = mesh.faceSize(f);
+    const int* ids = mesh.face(f);
+    for (int k = 0; k < n; ++k) {
+      const int a = ids[k], b = ids[(k + 1) % n];
+      const auto [it, added] = index.emplace(std::minmax(a, b), static_cast<int>(beams.size()));
+      if (added) {
+        beams.push_back({a, b, f});
+        continue;
+      }
+      Beam& beam = beams[it->second];
+      const std::string name = "panels: the edge between vertices " + std::to_string(a) + " and " + std::to_string(b);
+      if (beam.right >= 0)
+        throw Error(ErrorCode::InvalidInput, name + " is shared by more than two faces (" + label(beam.left) + ", " +
+                                                 label(beam.right) + ", " + label(f) + ")");
+      if (beam.a == a)
+        throw Error(ErrorCode::InvalidInput, name + " runs the same way in " + label(beam.left) + " and " + label(f) +
+                                                 " (faces not consistently oriented)");
+      beam.right = f;
+    }
+  }
+  std::string s = "beam,node_a,node_b,length,panel_left,panel_right,fold_deg,ax,ay,az,bx,by,bz\n";
+  for (std::size_t i = 0; i < beams.size(); ++i) {
+    const Beam& beam = beams[i];
+    const Vec3 a = mesh.vertex(beam.a), b = mesh.vertex(beam.b);
+    std::string fold;
+    if (beam.right >= 0) {
+      const Panel& l = panels[beam.left];
+      const Panel& r = panels[beam.right];
+      const double angle = std::atan2(l.normal.cross(r.normal).norm(), l.normal.dot(r.normal)) * 180.0 / kPi;
+      // A ridge where the right panel's centre lies below the left panel's plane (against its normal).
+      fold = num((r.centroid - l.centroid).dot(l.normal) <= 0 ? angle : -angle);
+    }
+    s += "B" + std::to_string(i + 1) + "," + std::to_string(beam.a + 1) + "," + std::to_string(beam.b + 1) + "," +
+         num((b - a).norm()) + "," + label(beam.left) + "," + (beam.right >= 0 ? label(beam.right) : "") + "," + fold;
+    for (const Vec3* p : {&a, &b})
+      for (int k = 0; k < 3; ++k) s += "," + num((*p)[k]);
     s += "\n";
   }
   return s;

@@ -85,6 +85,8 @@ Options of `phex run`:
   --panel-width W           width of the SVG sheet (default: about square)
   --panel-unit mm|cm|m|in   the mesh's length unit: the SVG sheet gets its true size for CAD and print
                             (default none: viewers fit it to the window)
+  --beams FILE.csv          write the beam schedule: one row per edge with its nodes, length, the
+                            panels either side and the fold between them (degrees, + ridge, - valley)
   --triangulation FILE.obj  write the triangulation as OBJ
   --initial FILE.obj        write the mesh before optimization as OBJ
   --report FILE.json        write counts, planarity, iterations and timings as JSON
@@ -250,7 +252,7 @@ phex::Vec3 parseVector(const std::string& opt, const std::string& text) {
 
 int run(const std::vector<std::string>& args, bool triangulateOnly) {
   phex::PipelineParams p;
-  std::string out, tri, initial, reportPath, format, panels;
+  std::string out, tri, initial, reportPath, format, panels, beams;
   phex::PanelSheetOptions sheet;
   bool quiet = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
@@ -285,6 +287,7 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--out") out = value();
     else if (a == "--triangulation") tri = value();
     else if (a == "--panels") panels = value();
+    else if (a == "--beams") beams = value();
     else if (a == "--panel-gap") sheet.gap = parseNumber(a, value());
     else if (a == "--panel-width") sheet.width = parseNumber(a, value());
     else if (a == "--panel-unit") sheet.unit = value();
@@ -306,13 +309,14 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
   if (!panels.empty() && panelFormat != "svg" && panelFormat != "csv")
     usage("--panels writes .svg or .csv, got '" + panels + "'");
   if (!panels.empty() && triangulateOnly) usage("--panels needs phex run (a triangulation has no panels)");
+  if (!beams.empty() && triangulateOnly) usage("--beams needs phex run");
   if (!(sheet.gap >= 0)) usage("--panel-gap must be 0 or more");
   if (!(sheet.width >= 0)) usage("--panel-width must be 0 or more");
   if (!sheet.unit.empty() && sheet.unit != "mm" && sheet.unit != "cm" && sheet.unit != "m" && sheet.unit != "in")
     usage("--panel-unit must be mm, cm, m or in, got '" + sheet.unit + "'");
   phex::validate(p);
   // Fail on an unwritable output before computing anything.
-  for (const std::string* path : {&out, &tri, &initial, &reportPath, &panels})
+  for (const std::string* path : {&out, &tri, &initial, &reportPath, &panels, &beams})
     if (!path->empty()) phex::writeTextFile(*path, "");
 
   phex::ProgressFn progress;
@@ -341,6 +345,7 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     const std::vector<phex::Panel> flat = phex::flattenPanels(r.hex);
     phex::writeTextFile(panels, panelFormat == "svg" ? phex::panelsSvg(flat, sheet) : phex::panelsCsv(flat));
   }
+  if (!beams.empty()) phex::writeTextFile(beams, phex::beamsCsv(r.hex));
   const json rep = reportJson(p, r);
   if (!reportPath.empty()) phex::writeTextFile(reportPath, rep.dump(2) + "\n");
   std::cout << "faces " << r.metrics.faceCount << ", planarity max " << r.metrics.planarityMax << ", invalid faces "

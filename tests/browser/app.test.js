@@ -165,6 +165,9 @@ test('export PLY, JSON, glTF, the triangulation and a PNG', async () => {
   const csv = (await downloadOf('#export-schedule')).data.toString('utf8').trimEnd().split('\n');
   assert.match(csv[0], /^panel,corners,area/);
   assert.equal(csv.length, faceCount + 1);
+  const beams = (await downloadOf('#export-beams')).data.toString('utf8').trimEnd().split('\n');
+  assert.match(beams[0], /^beam,node_a,node_b,length/);
+  assert.equal(beams.length - 1, (vertices * 3) / 2, 'a closed torus: three beams at every node, each shared by two');
   assert.deepEqual(pageErrors, []);
 });
 

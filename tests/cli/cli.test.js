@@ -71,6 +71,7 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--panels', join(dir, 'p.svg'), '--panel-gap', '-1'], /--panel-gap must be 0 or more/],
     [['run', '--panels', join(dir, 'p.svg'), '--panel-unit', 'ft'], /--panel-unit must be mm, cm, m or in/],
     [['triangulate', '--panels', join(dir, 'p.svg')], /--panels needs phex run/],
+    [['triangulate', '--beams', join(dir, 'b.csv')], /--beams needs phex run/],
   ];
   for (const [args, pattern] of cases) {
     const r = phex(...args);
@@ -95,6 +96,14 @@ test('run --panels writes the faces laid flat: an SVG cut sheet and a CSV schedu
   const hexagons = rows.slice(1).map((r) => r.split(',')).filter((c) => c[1] === '6');
   assert.ok(hexagons.length > 0.8 * faces);
   assert.ok(hexagons.every((c) => c[12].split(';').some((a) => Number(a) > 180)), 'a reflex corner in every hexagon');
+  // The beam schedule: every edge once; at the boundary one panel, inside two.
+  const beams = join(dir, 'beams.csv');
+  assert.equal(phex('run', '--surface', 'hyperboloid', '--faces', '600', '--beams', beams, '--quiet').code, 0);
+  const edges = readFileSync(beams, 'utf8').trimEnd().split('\n').slice(1).map((r) => r.split(','));
+  const corners = rows.slice(1).reduce((n, r) => n + Number(r.split(',')[1]), 0);
+  const boundary = edges.filter((c) => c[5] === '').length;
+  assert.ok(boundary > 0);
+  assert.equal(2 * edges.length - boundary, corners, 'each face edge counted once per side');
 });
 
 test('curvature of an uploaded mesh keeps the vertex order; bad files are named', () => {

@@ -211,3 +211,83 @@ TEST_CASE("panels: bad meshes and options are named") {
   const PanelSheet sheet = layoutPanels(panels, narrow);
   CHECK(sheet.width > 3.9);  // the hexagon spans 4 across
 }
+
+namespace {
+
+std::vector<std::vector<std::string>> csvRows(const std::string& csv) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream lines(csv);
+  std::string line;
+  while (std::getline(lines, line)) {
+    std::vector<std::string> cells;
+    std::stringstream cellStream(line);
+    std::string cell;
+    while (std::getline(cellStream, cell, ',')) cells.push_back(cell);
+    if (!line.empty() && line.back() == ',') cells.emplace_back();
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+}  // namespace
+
+TEST_CASE("beams: one row per edge with its panels, and the fold between them signed ridge or valley") {
+  // Two unit squares meeting at a ridge along x (z = 1 there), both CCW seen from above.
+  PolyMesh roof;
+  roof.V.resize(6, 3);
+  roof.V << 0, -1, 0, 1, -1, 0, 1, 0, 1, 0, 0, 1, 0, 1, 0, 1, 1, 0;
+  roof.addFace({0, 1, 2, 3});
+  roof.addFace({3, 2, 5, 4});
+  std::vector<std::vector<std::string>> rows = csvRows(beamsCsv(roof));
+  REQUIRE(rows.size() == 1 + 7);  // 4 + 4 edges, one shared
+  CHECK(rows[0][0] == "beam");
+  int shared = 0;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    REQUIRE(rows[i].size() == 13);
+    CHECK(rows[i][0] == "B" + std::to_string(i));
+    if (rows[i][5].empty()) {
+      CHECK(rows[i][6].empty());  // a boundary beam: no fold
+      continue;
+    }
+    ++shared;
+    CHECK(rows[i][4] == "P1");
+    CHECK(rows[i][5] == "P2");
+    CHECK(std::stod(rows[i][3]) == Approx(1.0));
+    CHECK(std::stod(rows[i][6]) == Approx(90.0));  // normals (0,-1,1)/√2 and (0,1,1)/√2: a ridge
+  }
+  CHECK(shared == 1);
+  // Upside down (the same faces, z mirrored and turned to stay CCW seen from above): a valley.
+  PolyMesh valley = roof;
+  valley.V.col(2) = -valley.V.col(2);
+  rows = csvRows(beamsCsv(valley));
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    if (!rows[i][5].empty()) CHECK(std::stod(rows[i][6]) == Approx(-90.0));
+
+  // A closed convex P-Hex mesh (§7, 12 pentagons): every beam has two panels and is a ridge seen from outside,
+  // and there are V + F - 2 of them (Euler).
+  PipelineParams p;
+  p.method = TriangulationMethod::Subdivision;
+  p.surface = "icosahedron";
+  p.faces = 500;
+  const PipelineResult r = runPipeline(p);
+  REQUIRE(r.solve.converged);
+  rows = csvRows(beamsCsv(r.hex));
+  CHECK(static_cast<int>(rows.size()) - 1 == r.hex.V.rows() + r.hex.faceCount() - 2);
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    REQUIRE(rows[i].size() == 13);
+    CHECK(!rows[i][5].empty());
+    CHECK(std::stod(rows[i][6]) > 0);
+    const int a = std::stoi(rows[i][1]) - 1, b = std::stoi(rows[i][2]) - 1;
+    CHECK(std::stod(rows[i][3]) == Approx((r.hex.vertex(a) - r.hex.vertex(b)).norm()));
+  }
+
+  // Bad meshes: an edge of three faces, and two faces running an edge the same way.
+  PolyMesh three = roof;
+  three.V.conservativeResize(7, 3);
+  three.V.row(6) << 0.5, 0.5, 2;
+  three.addFace({2, 3, 6});
+  CHECK_THROWS_WITH(beamsCsv(three), Catch::Contains("shared by more than two faces (P1, P2, P3)"));
+  PolyMesh flipped = roof;
+  flipped.indices = {0, 1, 2, 3, 2, 3, 4, 5};
+  CHECK_THROWS_WITH(beamsCsv(flipped), Catch::Contains("runs the same way in P1 and P2"));
+}

@@ -403,3 +403,34 @@ test('panels lays every face flat, true to size, as an SVG sheet or a CSV schedu
   // The instance keeps working.
   assert.equal((await phex.panels(hex, { format: 'csv' })).trimEnd().split('\n').length, metrics.faceCount + 1);
 });
+
+test('beams lists every edge once with its panels and fold; bad meshes are named', async () => {
+  const { hex } = torus;
+  const rows = (await phex.beams(hex)).trimEnd().split('\n').map((r) => r.split(','));
+  assert.deepEqual(rows[0].slice(0, 7), ['beam', 'node_a', 'node_b', 'length', 'panel_left', 'panel_right', 'fold_deg']);
+  const vertices = hex.positions.length / 3;
+  assert.equal(rows.length - 1, (3 * vertices) / 2); // closed, three beams at each node
+  const { positions } = hex;
+  let ridges = 0;
+  let valleys = 0;
+  for (const row of rows.slice(1)) {
+    const [a, b] = [Number(row[1]) - 1, Number(row[2]) - 1];
+    const length = Math.hypot(...[0, 1, 2].map((k) => positions[3 * a + k] - positions[3 * b + k]));
+    assert.ok(Math.abs(Number(row[3]) - length) <= 1e-9 * length);
+    assert.match(row[4], /^P\d+$/);
+    assert.match(row[5], /^P\d+$/);
+    if (Number(row[6]) > 0) ridges++;
+    else valleys++;
+  }
+  // The torus' outer half is convex (ridges only); its inner half (K < 0) folds both ways.
+  assert.ok(ridges > valleys && valleys > 0, `${ridges} ridges, ${valleys} valleys`);
+  const doubled = { ...hex, faceOffsets: [0, 3, 6], faceIndices: [0, 1, 2, 0, 1, 3] };
+  let error;
+  try {
+    await phex.beams(doubled);
+  } catch (e) {
+    error = e;
+  }
+  assert.equal(error?.code, 'invalid_input');
+  assert.match(error.message, /runs the same way in P1 and P2/);
+});

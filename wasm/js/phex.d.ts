@@ -455,6 +455,13 @@ export interface PHex {
    * options. Queued like run().
    */
   panels(mesh: Mesh, options?: PanelOptions): Promise<string>;
+  /**
+   * The beam schedule of a polygon mesh (a run's `hex`) as CSV, one row per edge: label B<k>, its nodes (1-based
+   * vertex ids) and their positions, length, the panels on its left and right (empty at the boundary) and the
+   * fold between them in degrees (positive at a ridge seen from the normal side, negative in a valley). Rejects
+   * with 'invalid_input' for a malformed mesh or an edge of more than two faces. Queued like run().
+   */
+  beams(mesh: Mesh): Promise<string>;
   /** Version of the phex core, e.g. "0.1.0". */
   readonly version: string;
   /** Stops the worker and frees the wasm instance; pending runs reject with code 'cancelled' and later calls fail. */

@@ -340,8 +340,16 @@ class PHex {
       if (unit !== undefined && !['mm', 'cm', 'm', 'in'].includes(unit)) throw invalid(`unit must be 'mm', 'cm', 'm' or 'in', got ${describe(unit)}`);
       if (labels !== undefined && typeof labels !== 'boolean') throw invalid(`labels must be true or false, got ${describe(labels)}`);
       const options = Object.fromEntries(Object.entries({ format, gap, width, unit, labels }).filter(([, v]) => v !== undefined));
-      resolve(this.#enqueue(() => this.#backend.call('panels', [mesh, options])));
+      resolve(this.#enqueue(() => this.#backend.call('fabrication', [mesh, options])));
     }).then((value) => value.text);
+  }
+
+  /**
+   * The edges of a polygon mesh (a run's `hex`) as the frame's beam schedule, CSV: one row per beam with its
+   * nodes, length, the panels either side and the fold between them (positive at a ridge). Resolves to the text.
+   */
+  beams(mesh) {
+    return this.#enqueue(() => this.#backend.call('fabrication', [mesh, { format: 'beams' }])).then((value) => value.text);
   }
 
   dispose() {

@@ -61,8 +61,8 @@ export async function loadEngine() {
     surfacePreview(params) {
       return answer(core.surfacePreview(params));
     },
-    panels(mesh, options) {
-      return answer(core.panels(mesh, options));
+    fabrication(mesh, options) {
+      return answer(core.fabrication(mesh, options));
     },
     /** Heap size, and the bytes malloc has handed out where the binding can tell (else null). */
     memory() {
@@ -87,7 +87,7 @@ function serve() {
     ({ version, surfaces, capabilities }) => postMessage({ type: 'ready', info: { version, surfaces, capabilities } }),
     (error) => postMessage({ type: 'failed', message: `could not load the phex wasm module: ${error?.message ?? error}` }),
   );
-  const METHODS = ['run', 'surfacePreview', 'memory', 'panels'];
+  const METHODS = ['run', 'surfacePreview', 'memory', 'fabrication'];
   addEventListener('message', async ({ data }) => {
     if (data?.type !== 'call' || !METHODS.includes(data.method)) return;
     const engine = await ready;

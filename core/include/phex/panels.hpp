@@ -1,4 +1,5 @@
-// phex — fabrication output: every face of a P-Hex mesh as a flat panel, true to size, with its cut data.
+// phex — fabrication output: every face of a P-Hex mesh as a flat panel, true to size, with its cut data, and
+// every edge as a beam of the frame.
 #pragma once
 #include <string>
 #include <vector>
@@ -51,5 +52,14 @@ std::string panelsSvg(const std::vector<Panel>& panels, const PanelSheetOptions&
 // The panel schedule as CSV, one row per panel: label, corners, area, perimeter, planarity, centroid and normal
 // in space, then edge lengths, corner angles and the flat outline (x y pairs), each list ';'-separated.
 std::string panelsCsv(const std::vector<Panel>& panels);
+
+// The beam schedule as CSV, one row per edge of `mesh` (a P-Hex mesh's nodes join three beams): label B<k> in
+// order of first use by the faces, its nodes (1-based vertex ids, as in OBJ) and their positions, its length,
+// the panels on its left and right (the face that runs it from the first node to the second, and the other;
+// empty at the boundary) and the fold between them in degrees: the angle between their planes, positive at a
+// ridge (seen from the normal side the panels fall away on both sides), negative in a valley. Throws
+// Error(InvalidInput) as flattenPanels does, and naming the edge where more than two faces share it or two run
+// it the same way.
+std::string beamsCsv(const PolyMesh& mesh);
 
 }  // namespace phex
