@@ -55,8 +55,10 @@ constexpr double kMeetReach = 3.5;
 constexpr double kSeedHole = 4.0;
 constexpr double kSeedShare = 0.05;
 // The first such system only where the first left at least this share uncovered: a laying that covers most of
-// the surface (the helicoid's rows end short of its corners, 11 %) is better left whole than seamed.
-constexpr double kSeedFirstShare = 0.2;
+// the surface (the helicoid's rows end short of its corners, 11 %) is better left whole than seamed. At 0.2 the
+// bumps' first system left 19 % bare at one cell (100k faces asked: 68k vertices instead of 99k with further
+// systems), and the face count hunted between the two coverings (128k faces kept; 101k now).
+constexpr double kSeedFirstShare = 0.15;
 constexpr int kSeedSamples = 1024;
 constexpr int kMaxSeeds = 6;
 constexpr double kSeedClearance = 0.9;
