@@ -2,7 +2,7 @@
 // `import ... from 'phex'`, one run per slider change, the previous run aborted.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
-import { createPHex, triangulateFaces } from 'phex';
+import { createPHex, faceAreas, triangulateFaces } from 'phex';
 
 /** Shapes offered to the customer: an analytic surface of phex and its parameters for a span in metres. */
 const PATTERNS = {
@@ -67,6 +67,28 @@ function show(hex) {
 const phex = await createPHex();
 let controller = null;
 let timer = 0;
+let latest = null; // the last mesh shown, for the cut sheet
+
+/** Glass area and frame length of a P-Hex mesh (each edge once), for the quote. */
+function quantities(hex) {
+  const area = faceAreas(hex).reduce((a, b) => a + b, 0);
+  const seen = new Set();
+  let frame = 0;
+  const p = hex.positions;
+  for (let f = 0; f + 1 < hex.faceOffsets.length; f++) {
+    const a = hex.faceOffsets[f];
+    const n = hex.faceOffsets[f + 1] - a;
+    for (let i = 0; i < n; i++) {
+      const u = hex.faceIndices[a + i];
+      const v = hex.faceIndices[a + ((i + 1) % n)];
+      const key = u < v ? `${u},${v}` : `${v},${u}`;
+      if (seen.has(key)) continue;
+      seen.add(key);
+      frame += Math.hypot(p[3 * u] - p[3 * v], p[3 * u + 1] - p[3 * v + 1], p[3 * u + 2] - p[3 * v + 2]);
+    }
+  }
+  return { area, frame };
+}
 
 async function update() {
   const span = Number($('size').value);
@@ -80,8 +102,11 @@ async function update() {
     const pattern = PATTERNS[$('pattern').value];
     const result = await phex.run({ surface: pattern.surface, surfaceParams: pattern.params(span), faces: panels }, { signal: mine.signal });
     show(result.hex);
+    latest = result.hex;
     const { faceCount, planarityMax, facesBySize } = result.metrics;
-    $('quote').textContent = `${faceCount} flat panels (${facesBySize['6'] ?? 0} hexagons), flatness ${planarityMax.toExponential(1)}, computed in ${Math.round(result.timings.total)} ms`;
+    const { area, frame } = quantities(result.hex);
+    $('quote').textContent = `${faceCount} flat panels (${facesBySize['6'] ?? 0} hexagons), ${area.toFixed(1)} m² of glass, ${Math.round(frame)} m of frame; flatness ${planarityMax.toExponential(1)}, computed in ${Math.round(result.timings.total)} ms`;
+    $('sheet').disabled = false;
     $('error').hidden = true;
     document.body.dataset.state = 'ready';
   } catch (error) {
@@ -91,6 +116,20 @@ async function update() {
     document.body.dataset.state = 'error';
   }
 }
+
+// The glass panels laid flat, true to size (the spans are in metres), labelled as the faces: for the cutter.
+$('sheet').addEventListener('click', async () => {
+  if (!latest) return;
+  try {
+    const svg = await phex.panels(latest, { unit: 'm' });
+    const link = Object.assign(document.createElement('a'), { href: URL.createObjectURL(new Blob([svg], { type: 'image/svg+xml' })), download: 'canopy-panels.svg' });
+    link.click();
+    setTimeout(() => URL.revokeObjectURL(link.href), 0);
+  } catch (error) {
+    $('error').textContent = error.message;
+    $('error').hidden = false;
+  }
+});
 
 for (const id of ['pattern', 'size', 'panels']) {
   $(id).addEventListener('input', () => {

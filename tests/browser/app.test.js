@@ -310,6 +310,11 @@ test('the embedding example computes a mesh and follows its sliders', async () =
     await embed.waitForSelector('body[data-state=ready]', { timeout: RUN_TIMEOUT_MS });
     const first = await embed.textContent('#quote');
     assert.match(first, /flat panels/);
+    assert.match(first, /[0-9.]+ m² of glass, \d+ m of frame/);
+    const [sheet] = await Promise.all([embed.waitForEvent('download'), embed.click('#sheet')]);
+    const svg = readFileSync(await sheet.path(), 'utf8');
+    assert.equal((svg.match(/<polygon /g) ?? []).length, Number(first.match(/^(\d+) flat panels/)[1]));
+    assert.match(svg, /<svg [^>]*width="[0-9.e+-]+mm"/); // true size: the spans are in metres
     const png = await embed.locator('#view').screenshot();
     const { count, total } = await nonBackgroundPixels(png, page, [0xf7, 0xf9, 0xfb]);
     assert.ok(count > total * 0.03, `only ${count} of ${total} pixels show the canopy`);
