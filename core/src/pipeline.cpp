@@ -813,8 +813,14 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     r.boundaryPanelsSplit = t.boundaryPanelsSplit;
     r.interiorFacesSplit = t.interiorFacesSplit;
   };
-  const Duality asked = params.duality == Duality::Auto ? Duality::Dupin : params.duality;
-  const bool dupinStalled = solveFrom(r, asked, dualOf(asked));
+  // On a surface laid in several systems of rows the local solver starts from the tangent dual, whose faces
+  // lie in the tangent planes: across the seams' irregular vertices the Dupin dual's faces leave more to fold
+  // (the bumps over 18 sizes from 1000 to 20000 faces, analytic and uploaded: interior faces cut at 6000
+  // faces 233 -> 87, hexagons 84.3 % -> 86.2 % and 83.7 % -> 85.3 % on average, better in 30 of 36 runs, none
+  // folded, 3-5 % faster).
+  const bool tangentFirst = params.duality == Duality::Auto && seams && params.solver == PlanarizeMethod::LocalGlobal;
+  const Duality asked = params.duality != Duality::Auto ? params.duality : tangentFirst ? Duality::Tangent : Duality::Dupin;
+  const bool firstStalled = solveFrom(r, asked, dualOf(asked));
   // Where the solve from the Dupin dual stalls short of the tolerance or leaves faces crossing themselves,
   // the tangent dual (§4.1) is tried as well: its faces lie in the tangent planes at their vertices, so on
   // a triangulation along a conjugate network it is planar as it stands (the cyclide's lattice at 3000 to
@@ -822,7 +828,8 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // crossing themselves, then the converged one, then (both converged) the one with fewer interior faces
   // cut, then the lower planarity, is kept; `duality` says which. A Dupin solve that reached the tolerance
   // only by the cuts a stall allows counts as stalled here: the tangent dual may need none (the cyclide's
-  // lattice at 3000 faces: 0 iterations and no cut, where the Dupin dual needed 20 faces cut).
+  // lattice at 3000 faces: 0 iterations and no cut, where the Dupin dual needed 20 faces cut). From the
+  // tangent dual first (tangentFirst), the Dupin dual is the one tried as well, alike.
   // (Duality::Auto only.)
   if (params.duality == Duality::Auto) {
     const int crossed = crossing(r.hex);
@@ -832,14 +839,15 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
         if (!(facePlanarity(dual.mesh, f) <= po.tolerance)) return false;
       return true;
     };
-    std::optional<DualMesh> tangent;
-    if (!r.solve.converged || crossed > 0 || dupinStalled) tangent = dualOf(Duality::Tangent);
-    if (tangent && (params.solver == PlanarizeMethod::LocalGlobal || planarAsItStands(*tangent))) {
+    const Duality other = asked == Duality::Dupin ? Duality::Tangent : Duality::Dupin;
+    std::optional<DualMesh> second;
+    if (!r.solve.converged || crossed > 0 || firstStalled) second = dualOf(other);
+    if (second && (params.solver == PlanarizeMethod::LocalGlobal || planarAsItStands(*second))) {
       PipelineResult t;
-      solveFrom(t, Duality::Tangent, std::move(*tangent));
-      const int tangentCrossed = crossing(t.hex);
+      solveFrom(t, other, std::move(*second));
+      const int otherCrossed = crossing(t.hex);
       const bool better =
-          tangentCrossed != crossed                        ? tangentCrossed < crossed
+          otherCrossed != crossed                          ? otherCrossed < crossed
           : t.solve.converged != r.solve.converged           ? t.solve.converged
           : t.solve.converged && t.interiorFacesSplit != r.interiorFacesSplit ? t.interiorFacesSplit < r.interiorFacesSplit
                                                              : t.solve.planarityMax < r.solve.planarityMax;
