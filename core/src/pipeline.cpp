@@ -327,9 +327,9 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
   // contains the parabolic curves it costs no lay. On such a surface the half-size trials predict the full
   // lay poorly (a laying that covers 44 % at half the size may cover 28 % at full size), so unless the trials
   // differ clearly (kClearTrial) the two families' best starts are laid once more at full size, and the better
-  // of those decides. Each at
-  // the cell its trial predicts for the face count asked (as the full lay is, see `triangulate`), and the
-  // winner's lay is kept as the full lay: on the bumps at 10k faces one lay of about 0.45 s fewer.
+  // of those decides. Each at the cell its trial predicts for the face count asked (as the full lay is, see
+  // `triangulate`), and the winner's lay is kept as the full lay: one lay fewer (on the bumps at 10k faces,
+  // before kClearTrial let the trials decide there, about 0.45 s).
   bool otherFamily = false;
   if (poor && best.start && (choice.base == BaseFamily::First || choice.base == BaseFamily::Conjugate)) {
     const BaseFamily rule = choice.base, other = rule == BaseFamily::First ? BaseFamily::Conjugate : BaseFamily::First;
