@@ -170,3 +170,46 @@ TEST_CASE("planarize: a node on fewer than three face planes is put nearest the 
   CHECK(off.freeNodesSettled == 0);
   CHECK(plain.V == quad.V);
 }
+
+TEST_CASE("planarize: the face planes shift to the surface around nodes among triangles too") {
+  // A planar P-Hex mesh of the sphere blown up by 2 % (faces stay planar; every node 0.02 off), one hexagon
+  // then cut into a fan of triangles: its corners have two or three polygons and two or three triangles
+  // around them. Triangles hold no node (planar wherever their corners go), so those corners still follow
+  // their polygons' planes, and every node comes back near the sphere; counted as planes, the triangles
+  // froze the planes around the fan and its nodes stayed 0.02 off.
+  PipelineParams p;
+  p.surface = "sphere";
+  p.faces = 300;
+  const PipelineResult r = runPipeline(p);
+  REQUIRE(r.solve.converged);
+  const ParametricSurfacePtr sphere = makeSurface("sphere");
+  PolyMesh m;
+  m.V = 1.02 * r.hex.V;
+  int fan = -1;
+  for (int f = 0; f < r.hex.faceCount(); ++f) {
+    const std::vector<int> ids(r.hex.face(f), r.hex.face(f) + r.hex.faceSize(f));
+    if (fan < 0 && ids.size() == 6 && !r.dual.boundaryFace[f]) {
+      fan = f;
+      for (int k = 1; k + 1 < 6; ++k) m.addFace({ids[0], ids[k], ids[k + 1]});
+    } else {
+      m.addFace(ids);
+    }
+  }
+  REQUIRE(fan >= 0);
+  const double before = measure(m, *sphere).surfaceDistanceMax;
+  PlanarizeOptions o;
+  o.surface = sphere.get();
+  const PlanarizeReport fitted = planarize(m, o);
+  const MeshMetrics after = measure(m, *sphere);
+  CHECK(fitted.surfaceFitted);
+  CHECK(after.planarityMax <= 1e-9);
+  CHECK(after.selfIntersectingCount == 0);
+  CHECK(after.surfaceDistanceMax < 0.2 * before);
+  // The fan's triangles did not turn over.
+  for (int f = 0; f < m.faceCount(); ++f) {
+    if (m.faceSize(f) != 3) continue;
+    const int* ids = m.face(f);
+    const Vec3 n = (m.vertex(ids[1]) - m.vertex(ids[0])).cross(m.vertex(ids[2]) - m.vertex(ids[0]));
+    CHECK(n.dot(m.vertex(ids[0])) > 0);  // still facing out
+  }
+}
