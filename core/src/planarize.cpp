@@ -607,26 +607,9 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
   if (nv == 0 || nf == 0 || !(h > 0)) return fit;
   std::vector<Vec3> normal(nf);
   for (int f = 0; f < nf; ++f) normal[f] = leastSquaresPlane(mesh, f).normal;
-  // A triangle is planar wherever its corners go: it holds no node, and its corners follow the other faces'
-  // planes. Counted, it froze the planes at every node that cuts left among triangles (the bumps at 1500
-  // faces: a node of two triangles, a quad, a hexagon and a heptagon stayed 0.25 % of the diagonal off).
-  // What it must not do is turn over.
-  const FacesAtVertices at = facesAtVertices(mesh, [&](int f) { return mesh.faceSize(f) > 3; });
+  const FacesAtVertices at = facesAtVertices(mesh, [](int) { return true; });
   const std::vector<int>& start = at.start;
   const std::vector<int>& faces = at.faces;
-  auto triangleNormal = [&](int f) {
-    const int* ids = mesh.face(f);
-    return Vec3((mesh.vertex(ids[1]) - mesh.vertex(ids[0])).cross(mesh.vertex(ids[2]) - mesh.vertex(ids[0])));
-  };
-  std::vector<Vec3> triangleAtStart(nf, Vec3::Zero());
-  for (int f = 0; f < nf; ++f)
-    if (mesh.faceSize(f) == 3) triangleAtStart[f] = triangleNormal(f);
-  // Face f folds: a polygon crosses itself (seen along its plane's normal), a triangle turns over.
-  auto folds = [&](int f) {
-    if (mesh.faceSize(f) != 3) return faceSelfIntersects(mesh, f, normal[f]);
-    const Vec3& n0 = triangleAtStart[f];
-    return !(triangleNormal(f).dot(n0) > 0.25 * n0.squaredNorm());
-  };
   // G_v, column k for the k-th face at v (3 x #faces(v), stored column after column).
   std::vector<Vec3> G(faces.size(), Vec3::Zero());
   std::vector<char> frozen(nf, 0);
@@ -688,13 +671,13 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
   };
   auto selfIntersecting = [&]() {
     int count = 0;
-    for (int f = 0; f < nf; ++f) count += folds(f);
+    for (int f = 0; f < nf; ++f) count += faceSelfIntersects(mesh, f, normal[f]);
     return count;
   };
   fit.before = footPoints();
   const std::vector<LocalGeometry> feetAtStart = feet;
   std::vector<char> foldedAtStart(nf, 0);
-  for (int f = 0; f < nf; ++f) foldedAtStart[f] = folds(f);
+  for (int f = 0; f < nf; ++f) foldedAtStart[f] = faceSelfIntersects(mesh, f, normal[f]);
   const int foldedBefore = static_cast<int>(std::count(foldedAtStart.begin(), foldedAtStart.end(), 1));
   // Weights relative to the normal distance. A node where three nearly coaxial planes meet moves mostly
   // along the surface when they shift: at 0.1 its drift held it off (the uploaded cyclide at 2000 faces,
@@ -809,7 +792,7 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
       for (int ring = 0; ring < 3; ++ring) {
         std::vector<char> undo(nf, 0);
         for (int f = 0; f < nf; ++f) {
-          if (foldedAtStart[f] || !folds(f)) continue;
+          if (foldedAtStart[f] || !faceSelfIntersects(mesh, f, normal[f])) continue;
           for (int i = 0; i < mesh.faceSize(f); ++i)
             for (int v = mesh.face(f)[i], k = start[v]; k < start[v + 1]; ++k) undo[faces[k]] = 1;
         }
@@ -842,7 +825,7 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
     if (attempt == kRefreezes || folded >= lastFolded) break;
     lastFolded = folded;
     for (int f = 0; f < nf; ++f) {
-      if (foldedAtStart[f] || !folds(f)) continue;
+      if (foldedAtStart[f] || !faceSelfIntersects(mesh, f, normal[f])) continue;
       frozen[f] = 1;  // first the folded faces alone, then also the faces at their corners
       if (attempt > 0)
         for (int i = 0; i < mesh.faceSize(f); ++i)
