@@ -61,6 +61,22 @@ double planarityAgainst(const PolyMesh& mesh, int face, const FacePlane& plane) 
 
 double facePlanarity(const PolyMesh& mesh, int face) { return planarityAgainst(mesh, face, leastSquaresPlane(mesh, face)); }
 
+double facePlanarity(const PolyMesh& mesh, int face, const FacePlane& plane) { return planarityAgainst(mesh, face, plane); }
+
+Vec3 normalLikeFace(const PolyMesh& mesh, int face, const Vec3& normal) {
+  const int n = mesh.faceSize(face);
+  const int* ids = mesh.face(face);
+  Vec3 area = Vec3::Zero();
+  for (int i = 0; i < n; ++i) area += mesh.vertex(ids[i]).cross(mesh.vertex(ids[(i + 1) % n]));
+  return area.dot(normal) < 0 ? Vec3(-normal) : normal;
+}
+
+double signedArea(const std::vector<Vec2>& p) {
+  double a = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) a += cross2(p[i], p[(i + 1) % p.size()]);
+  return 0.5 * a;
+}
+
 bool polygonSelfIntersects(const std::vector<Vec2>& p) {
   const int n = static_cast<int>(p.size());
   double scale = 0;
@@ -83,10 +99,7 @@ namespace {
 void planarCorners(const PolyMesh& mesh, int face, const FacePlane& pl, std::vector<Vec2>& p) {
   const int n = mesh.faceSize(face);
   const int* ids = mesh.face(face);
-  Vec3 normal = pl.normal;
-  Vec3 area = Vec3::Zero();  // the face's vector area orients the plane like the face
-  for (int i = 0; i < n; ++i) area += mesh.vertex(ids[i]).cross(mesh.vertex(ids[(i + 1) % n]));
-  if (area.dot(normal) < 0) normal = -normal;
+  const Vec3 normal = normalLikeFace(mesh, face, pl.normal);
   const Vec3 ex = (std::abs(normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(normal).normalized();
   const Vec3 ey = normal.cross(ex);
   p.resize(n);
@@ -100,12 +113,6 @@ std::vector<Vec2> planarCorners(const PolyMesh& mesh, int face, const FacePlane&
   std::vector<Vec2> p;
   planarCorners(mesh, face, pl, p);
   return p;
-}
-
-double signedArea(const std::vector<Vec2>& p) {
-  double a = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) a += cross2(p[i], p[(i + 1) % p.size()]);
-  return 0.5 * a;
 }
 
 // Every turn to the left and no crossing; `selfIntersecting` is polygonSelfIntersects(p), known already.

@@ -26,16 +26,6 @@ std::string num(double x) {
   return buf;
 }
 
-double signedArea(const std::vector<Vec2>& p) {
-  double a = 0;
-  for (std::size_t k = 0; k < p.size(); ++k) {
-    const Vec2& q = p[k];
-    const Vec2& r = p[(k + 1) % p.size()];
-    a += q.x() * r.y() - r.x() * q.y();
-  }
-  return 0.5 * a;
-}
-
 // The area centroid of a simple polygon (the mean corner where the area vanishes).
 Vec2 areaCentroid(const std::vector<Vec2>& p) {
   const double a = signedArea(p);
@@ -99,11 +89,7 @@ std::vector<Panel> flattenPanels(const PolyMesh& mesh) {
     p.face = f;
     const FacePlane plane = leastSquaresPlane(mesh, f);
     p.centroid = plane.centroid;
-    p.normal = plane.normal;
-    // The normal on the side the corners turn counterclockwise (Newell's vector).
-    Vec3 newell = Vec3::Zero();
-    for (int k = 0; k < n; ++k) newell += mesh.vertex(ids[k]).cross(mesh.vertex(ids[(k + 1) % n]));
-    if (newell.dot(p.normal) < 0) p.normal = -p.normal;
+    p.normal = normalLikeFace(mesh, f, plane.normal);  // on the side the corners turn counterclockwise
     auto onPlane = [&](int k) {
       const Vec3 q = mesh.vertex(ids[k]);
       return Vec3(q - (q - p.centroid).dot(p.normal) * p.normal);
@@ -137,7 +123,7 @@ std::vector<Panel> flattenPanels(const PolyMesh& mesh) {
       const double turn = std::atan2(in.x() * out.y() - in.y() * out.x(), in.dot(out));
       p.angles.push_back(180.0 - turn * 180.0 / kPi);
     }
-    p.planarity = facePlanarity(mesh, f);
+    p.planarity = facePlanarity(mesh, f, plane);
   }
   return panels;
 }

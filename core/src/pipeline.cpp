@@ -170,6 +170,12 @@ constexpr double kCountLoose = 1.15;
 // About how many faces (vertices of the triangulation) `cell` gives on `surface`: cellForFaceCount inverted.
 double facesAtCell(const Surface& surface, double cell) { return std::pow(cellForFaceCount(surface, 1) / cell, 2); }
 
+// Whether a trial lay of `trialVertices` vertices at `trialCell` predicts that `cell` misses `faces` vertices by
+// more than kCount (counts go as cell^-2).
+bool trialPredictsMiss(double trialCell, double trialVertices, double cell, int faces) {
+  return std::abs(std::log(trialVertices * trialCell * trialCell / (cell * cell) / faces)) > std::log(kCount);
+}
+
 // The cell a trial lay of `trialVertices` vertices at `trialCell` predicts for `faces` vertices (counts go as
 // cell^-2), within a factor 2 of the area estimate's cell `estimate`, which it is where it would pass kMaxFaces.
 double predictedCell(const Surface& surface, double trialCell, double trialVertices, int faces, double estimate) {
@@ -342,9 +348,9 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
     } else if (alternative.start) {
       const double trialCell = trial.cell;
       auto fullCell = [&](double vertices) {  // as `triangulate` picks the full lay's cell
-        const double miss = std::abs(std::log(vertices * trialCell * trialCell / (options.cell * options.cell) / faces));
-        return cellGiven || miss <= std::log(kCount) ? options.cell
-                                                     : predictedCell(surface, trialCell, vertices, faces, options.cell);
+        return cellGiven || !trialPredictsMiss(trialCell, vertices, options.cell, faces)
+                   ? options.cell
+                   : predictedCell(surface, trialCell, vertices, faces, options.cell);
       };
       Triangulation layRule, layOther;
       trial.cell = fullCell(best.vertices);
@@ -480,7 +486,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       // analytic wave roof laid 17.8k vertices for 10k asked from the area estimate's cell, then a second lay
       // (1077 -> 773 ms at 10k faces; the hyperboloid 1083 -> 575, the vase 991 -> 653).
       bool fromTrial = params.cell == 0 && trialVertices > 0 && trialCell > cell &&
-                       std::abs(std::log(trialVertices * trialCell * trialCell / (cell * cell) / params.faces)) > std::log(kCount);
+                       trialPredictsMiss(trialCell, trialVertices, cell, params.faces);
       if (choice.laid) {
         // The families were compared at full size (chooseStart): the winner's lay is this lay.
         fromTrial = params.cell == 0;

@@ -37,20 +37,32 @@ function resize() {
 }
 new ResizeObserver(resize).observe($('view'));
 
-function show(hex) {
+/** Every edge of a polygon mesh once, as pairs of vertex ids [a0, b0, a1, b1, ...]: the panel frames. */
+function frameEdges(hex) {
+  const seen = new Set();
+  const edges = [];
+  for (let f = 0; f + 1 < hex.faceOffsets.length; f++) {
+    const a = hex.faceOffsets[f];
+    const n = hex.faceOffsets[f + 1] - a;
+    for (let i = 0; i < n; i++) {
+      const u = hex.faceIndices[a + i];
+      const v = hex.faceIndices[a + ((i + 1) % n)];
+      const key = u < v ? `${u},${v}` : `${v},${u}`;
+      if (seen.has(key)) continue;
+      seen.add(key);
+      edges.push(u, v);
+    }
+  }
+  return edges;
+}
+
+function show(hex, edges) {
   if (shown) for (const o of shown) (scene.remove(o), o.geometry.dispose());
   const { positions, index } = triangulateFaces(hex);
   const geometry = new THREE.BufferGeometry();
   geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
   geometry.setIndex(new THREE.BufferAttribute(index, 1));
   geometry.computeVertexNormals();
-  // Panel frames: the polygon edges.
-  const edges = [];
-  for (let f = 0; f + 1 < hex.faceOffsets.length; f++) {
-    const a = hex.faceOffsets[f];
-    const n = hex.faceOffsets[f + 1] - a;
-    for (let i = 0; i < n; i++) edges.push(hex.faceIndices[a + i], hex.faceIndices[a + ((i + 1) % n)]);
-  }
   const lines = new THREE.BufferGeometry();
   lines.setAttribute('position', new THREE.BufferAttribute(positions, 3));
   lines.setIndex(edges);
@@ -69,23 +81,14 @@ let controller = null;
 let timer = 0;
 let latest = null; // the last mesh shown, for the cut sheet
 
-/** Glass area and frame length of a P-Hex mesh (each edge once), for the quote. */
-function quantities(hex) {
+/** Glass area and frame length (`edges` from frameEdges) of a P-Hex mesh, for the quote. */
+function quantities(hex, edges) {
   const area = faceAreas(hex).reduce((a, b) => a + b, 0);
-  const seen = new Set();
-  let frame = 0;
   const p = hex.positions;
-  for (let f = 0; f + 1 < hex.faceOffsets.length; f++) {
-    const a = hex.faceOffsets[f];
-    const n = hex.faceOffsets[f + 1] - a;
-    for (let i = 0; i < n; i++) {
-      const u = hex.faceIndices[a + i];
-      const v = hex.faceIndices[a + ((i + 1) % n)];
-      const key = u < v ? `${u},${v}` : `${v},${u}`;
-      if (seen.has(key)) continue;
-      seen.add(key);
-      frame += Math.hypot(p[3 * u] - p[3 * v], p[3 * u + 1] - p[3 * v + 1], p[3 * u + 2] - p[3 * v + 2]);
-    }
+  let frame = 0;
+  for (let i = 0; i < edges.length; i += 2) {
+    const [u, v] = [edges[i], edges[i + 1]];
+    frame += Math.hypot(p[3 * u] - p[3 * v], p[3 * u + 1] - p[3 * v + 1], p[3 * u + 2] - p[3 * v + 2]);
   }
   return { area, frame };
 }
@@ -101,10 +104,11 @@ async function update() {
   try {
     const pattern = PATTERNS[$('pattern').value];
     const result = await phex.run({ surface: pattern.surface, surfaceParams: pattern.params(span), faces: panels }, { signal: mine.signal });
-    show(result.hex);
+    const edges = frameEdges(result.hex);
+    show(result.hex, edges);
     latest = result.hex;
     const { faceCount, planarityMax, facesBySize } = result.metrics;
-    const { area, frame } = quantities(result.hex);
+    const { area, frame } = quantities(result.hex, edges);
     $('quote').textContent = `${faceCount} flat panels (${facesBySize['6'] ?? 0} hexagons), ${area.toFixed(1)} m² of glass, ${Math.round(frame)} m of frame; flatness ${planarityMax.toExponential(1)}, computed in ${Math.round(result.timings.total)} ms`;
     $('sheet').disabled = false;
     $('error').hidden = true;

@@ -16,6 +16,13 @@ FacePlane leastSquaresPlane(const PolyMesh& mesh, int face);
 
 // Distance of the face's farthest vertex from its least-squares plane, divided by the face's mean edge length.
 double facePlanarity(const PolyMesh& mesh, int face);
+// The same against `plane` (e.g. the face's least-squares plane, known already).
+double facePlanarity(const PolyMesh& mesh, int face, const FacePlane& plane);
+// `normal` or its opposite, whichever is turned like the face's vector area (Newell's vector): the corners run
+// counterclockwise seen from the side it points to.
+Vec3 normalLikeFace(const PolyMesh& mesh, int face, const Vec3& normal);
+// Signed area of a closed polygon, positive where it runs counterclockwise.
+double signedArea(const std::vector<Vec2>& polygon);
 // True when two non-adjacent edges of the closed polygon cross or touch, or an edge is degenerate.
 bool polygonSelfIntersects(const std::vector<Vec2>& polygon);
 // True when two non-adjacent edges of the face cross (seen in its least-squares plane) or an edge is degenerate.
