@@ -69,6 +69,8 @@ test('bad input gives a message and exit code 1', () => {
     [['curvature', '--mesh', join(dir, 'missing.obj'), '--out', join(dir, 'c.csv')], /missing\.obj/],
     [['run', '--panels', join(dir, 'p.dxf')], /--panels writes \.svg or \.csv/],
     [['run', '--panels', join(dir, 'p.svg'), '--panel-gap', '-1'], /--panel-gap must be 0 or more/],
+    [['run', '--panels', join(dir, 'p.svg'), '--panel-width', '-2'], /--panel-width must be 0 or more/],
+    [['run', '--panels', join(dir, 'p.svg'), '--panel-gap', 'wide'], /--panel-gap expects a number/],
     [['run', '--panels', join(dir, 'p.svg'), '--panel-unit', 'ft'], /--panel-unit must be mm, cm, m or in/],
     [['triangulate', '--panels', join(dir, 'p.svg')], /--panels needs phex run/],
     [['triangulate', '--beams', join(dir, 'b.csv')], /--beams needs phex run/],

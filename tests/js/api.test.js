@@ -396,6 +396,12 @@ test('panels lays every face flat, true to size, as an SVG sheet or a CSV schedu
   error = await failure(hex, { gap: -1 });
   assert.equal(error.code, 'invalid_parameter');
   assert.match(error.message, /gap/);
+  error = await failure(hex, { width: Number.NaN });
+  assert.equal(error.code, 'invalid_parameter');
+  assert.match(error.message, /width/);
+  error = await failure(hex, { labels: 'yes' });
+  assert.equal(error.code, 'invalid_parameter');
+  assert.match(error.message, /labels/);
   const broken = { ...hex, faceIndices: Uint32Array.from(hex.faceIndices, (v, i) => (i === 8 ? 1e6 : v)) };
   error = await failure(broken);
   assert.equal(error.code, 'invalid_input');
