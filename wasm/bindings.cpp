@@ -303,7 +303,7 @@ val capabilities() {
   for (const char* m : {"auto", "progressive", "prespecified", "subdivision", "lattice"}) methods.call<void>("push", std::string(m));
   c.set("methods", methods);
   val fields = val::array();
-  for (const char* f : {"principal", "angle:DEG", "param", "radial", "diverging", "spiral"}) fields.call<void>("push", std::string(f));
+  for (const char* f : {"principal", "angle:DEG", "param", "radial", "diverging", "spiral", "section"}) fields.call<void>("push", std::string(f));
   c.set("fields", fields);
   c.set("lowerBound", true);
   val controls = val::array();

@@ -1,5 +1,6 @@
 #include "phex/direction_field.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -93,6 +94,33 @@ bool SurfaceWalker::isOutside(const Vec3& p, const SurfacePoint& foot) const {
   return (t - t.dot(foot.g.normal) * foot.g.normal).norm() > outsideTolerance();
 }
 
+Vec3 sectionPlaneNormal(const Surface& surface, double degrees) {
+  // The principal axes of some 400 samples: the normal of their mean plane (least variance) and their longest
+  // extent (most); the cutting planes contain the normal and the longest extent turned by `degrees`.
+  const std::vector<LocalGeometry> samples = surface.samples(400);
+  Vec3 mean = Vec3::Zero();
+  for (const LocalGeometry& g : samples) mean += g.point;
+  mean /= double(std::max<std::size_t>(samples.size(), 1));
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const LocalGeometry& g : samples) covariance += (g.point - mean) * (g.point - mean).transpose();
+  Vec3 up = Vec3::UnitZ(), along = Vec3::UnitX();
+  if (samples.size() >= 3) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> axes(covariance);  // eigenvalues ascending
+    if (axes.info() == Eigen::Success && axes.eigenvalues()(2) > 0) {
+      up = axes.eigenvectors().col(0);
+      along = axes.eigenvectors().col(2);
+    }
+  }
+  Eigen::Index largest = 0;
+  up.cwiseAbs().maxCoeff(&largest);
+  if (up(largest) < 0) up = -up;
+  along.cwiseAbs().maxCoeff(&largest);
+  if (along(largest) < 0) along = -along;
+  const double rad = degrees * kPi / 180;
+  const Vec3 across = up.cross(along).normalized();
+  return Vec3(-std::sin(rad) * along + std::cos(rad) * across);
+}
+
 FieldSpec parseFieldSpec(const std::string& text) {
   const std::size_t colon = text.find(':');
   const std::string name = text.substr(0, colon);
@@ -135,10 +163,13 @@ FieldSpec parseFieldSpec(const std::string& text) {
   } else if (name == "spiral") {
     spec.kind = FieldKind::Spiral;
     spec.degrees = degreesIn(-89, 89, 45);
+  } else if (name == "section") {
+    spec.kind = FieldKind::Section;
+    spec.degrees = degreesIn(-180, 180, 0);
   } else {
     throw Error(ErrorCode::InvalidParameter, "unknown direction field '" + text +
                                                  "' (known: principal, angle:DEG, param, param:v, radial, "
-                                                 "diverging[:DEG], spiral[:DEG])");
+                                                 "diverging[:DEG], spiral[:DEG], section[:DEG])");
   }
   return spec;
 }
@@ -152,6 +183,7 @@ std::string fieldSpecName(const FieldSpec& spec) {
     case FieldKind::Radial: s << "radial"; break;
     case FieldKind::Diverging: s << "diverging:" << spec.degrees; break;
     case FieldKind::Spiral: s << "spiral:" << spec.degrees; break;
+    case FieldKind::Section: s << "section:" << spec.degrees; break;
   }
   return s.str();
 }
@@ -163,6 +195,7 @@ DirectionField::DirectionField(const SurfaceWalker& walker, const FieldSpec& spe
   const double tilt = spec.kind == FieldKind::Diverging ? spec.degrees * kPi / 180 : 0.0;
   axis_ = Vec3(std::sin(tilt), 0, std::cos(tilt));
   centre_ = walker.surface().bounds().center();
+  if (spec.kind == FieldKind::Section) sectionNormal_ = sectionPlaneNormal(walker.surface(), spec.degrees);
 }
 
 std::optional<Vec3> DirectionField::meridian(const SurfacePoint& p) const {
@@ -198,6 +231,8 @@ std::optional<Vec3> DirectionField::first(const SurfacePoint& p) const {
       return meridian(p);
     case FieldKind::Spiral:
       return rotated(meridian(p));  // loxodrome: a fixed angle to the meridians
+    case FieldKind::Section:
+      return tangentUnit(g, g.normal.cross(sectionNormal_));  // the section curve's tangent
   }
   return std::nullopt;
 }
@@ -206,7 +241,10 @@ std::optional<Vec3> DirectionField::direction(const SurfacePoint& p, Family fami
   const LocalGeometry& g = p.g;
   std::optional<Vec3> d = first(p);
   const bool umbilic = isUmbilic(g);
-  bool anyIsFine = !d && (spec_.kind == FieldKind::Principal || spec_.kind == FieldKind::Angle);
+  // Where the field is undefined because the point is umbilic (principal), or the tangent plane is the cutting
+  // plane itself (section), any direction is as good as another and the line goes straight on.
+  bool anyIsFine = !d && (spec_.kind == FieldKind::Principal || spec_.kind == FieldKind::Angle ||
+                          spec_.kind == FieldKind::Section);
   // The conjugate direction of v, or nullopt at a parabolic point, where the zero-curvature direction is
   // conjugate to every direction (§5.3).
   auto conjugateOf = [&](const Vec3& v) -> std::optional<Vec3> {

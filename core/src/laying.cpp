@@ -62,7 +62,12 @@ constexpr double kSeedFirstShare = 0.15;
 constexpr int kSeedSamples = 1024;
 constexpr int kMaxSeeds = 6;
 constexpr double kSeedClearance = 0.9;
-constexpr int kShrunkLoop = 16;  // a closed row of fewer vertices checks its apexes' triangles against laid ones
+constexpr int kShrunkLoop = 16;
+// A closed L0 of fewer samples than kTinyLoop and shorter than kTinyLoopShare of the surface's diagonal (a loop
+// around an umbilic, not a thin tube's cross-section) moves kUmbilicRing cells outwards (baseCurve).
+constexpr std::size_t kTinyLoop = 8;
+constexpr double kTinyLoopShare = 0.1;
+constexpr int kUmbilicRing = 3;  // a closed row of fewer vertices checks its apexes' triangles against laid ones
 // ... seeded around the most nearly umbilic uncovered sample, relative k1 - k2 below this, if there is one.
 constexpr double kSeedUmbilic = 0.05;
 // Gaps left between systems (and between the fronts of one) are closed by triangles on the laid boundary
@@ -438,6 +443,7 @@ class Laying {
   int filledApexes_ = 0;
   int parabolicStops_ = 0;  // fronts stopped running along a parabolic curve (kMaxReusedLayers)
   std::string firstAlongParabolic_;
+  int widenedL0_ = 0;  // times L0 moved out from a tiny loop around an umbilic (baseCurve)
   int resampled_ = 0, boundaryStops_ = 0, collisions_ = 0, invalidDrops_ = 0, splits_ = 0, layers_ = 0;
   int asymptoticStops_ = 0, gapTriangles_ = 0;
   int boundaryEnds_ = 0, snappedEnds_ = 0;
@@ -512,10 +518,36 @@ FlowLine::End Laying::traceBase(const SurfacePoint& start, const Vec3& initial, 
 
 // L0: the flow line of D_F through the start, both ways to the boundary or once around a loop, sampled every
 // cell from the start.
-Row Laying::baseCurve(const SurfacePoint& start, const Vec3& initial) {
+Row Laying::baseCurve(const SurfacePoint& given, const Vec3& initial) {
+  SurfacePoint start = given;
   Row row;
   std::vector<double> arcs;
-  const FlowLine::End end = traceBase(start, initial, row, arcs);
+  FlowLine::End end = traceBase(start, initial, row, arcs);
+  // A start at (or next to) an umbilic around which the base family closes into rings (a hill's top) gives a
+  // loop of a few samples, too tight for rows to grow from: its first layers fold onto each other (a hill at
+  // 5000 faces: "the layers fold", or 7 triangles and nothing else). L0 moves out to a ring kUmbilicRing cells
+  // wider, away from the loop's middle, and its inner front lays inwards to the top as around seeded umbilics.
+  const double diagonal = walker_.surface().bounds().diagonal().norm();
+  for (int widen = 0; widen < 2 && row.closed && arcs.size() < kTinyLoop && row.curveLength < kTinyLoopShare * diagonal;
+       ++widen) {
+    Vec3 middle = Vec3::Zero();
+    for (const SurfacePoint& p : row.curve) middle += p.point();
+    middle /= double(row.curve.size());
+    Vec3 out = start.point() - middle;
+    out -= out.dot(start.g.normal) * start.g.normal;
+    if (!(out.norm() > 0)) break;
+    const SurfacePoint moved = walker_.project(start.point() + kUmbilicRing * o_.cell * out.normalized(), start);
+    if (walker_.isOutside(start.point() + kUmbilicRing * o_.cell * out.normalized(), moved)) break;
+    Row wider;
+    std::vector<double> widerArcs;
+    const FlowLine::End widerEnd = traceBase(moved, initial, wider, widerArcs);
+    if (widerArcs.size() <= arcs.size()) break;
+    ++widenedL0_;
+    start = moved;
+    row = std::move(wider);
+    arcs = std::move(widerArcs);
+    end = widerEnd;
+  }
   if (arcs.size() < 2)
     cannotTile(start, "the base curve (a flow line of the field) is shorter than one cell, " +
                           std::string(end == FlowLine::End::Singularity ? "ending at a singularity of the field"
@@ -1532,6 +1564,10 @@ std::optional<Vec3> Laying::uncoveredSeed(const std::vector<LocalGeometry>& samp
     if (near) covered.push_back(g.point);
     else open.push_back(&g);
   }
+  // A system that stopped within a cell of where it started (L0 a tiny loop around an umbilic: a hill's top
+  // with its conjugate rows laid from there) may come near no sample: its vertices mark what it covers.
+  if (covered.empty())
+    for (const SurfacePoint& v : vertices_) covered.push_back(v.point());
   const double share = tried.empty() ? kSeedFirstShare : kSeedShare;
   if (covered.empty() || open.size() < share * samples.size()) return std::nullopt;
   for (const Vec3& t : tried) covered.push_back(t);
@@ -2040,6 +2076,9 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
   note(reusedSegments_ > 0, "§5.3 step re-used from the previous layer across a parabolic curve on " +
                                 std::to_string(reusedLayers_) + " layers (" + std::to_string(reusedSegments_) +
                                 " triangles), first near " + firstReuse_);
+  note(widenedL0_ > 0, "L0 moved " + std::to_string(widenedL0_ * kUmbilicRing) + " cells out from the start, where "
+                           "the base family closes into a loop of a few cells (around an umbilic): the rows grow "
+                           "from a wider ring, and its inner front lays inwards");
   note(resampled_ > 0, "rows resampled " + std::to_string(resampled_) +
                            " times where their spacing drifted from the cell, first near " + firstResample_);
   note(filledApexes_ > 0, std::to_string(filledApexes_) + " missing apexes filled in between their neighbours");

@@ -43,7 +43,9 @@ Options of `phex run`:
                             Method 1), prespecified (Method 2, along --field), subdivision (§7, closed
                             convex surfaces) or lattice (parameter rows; analytic surfaces only)
   --field SPEC              direction field: principal (default; under --method auto the surface's
-                            recommended field), angle:DEG, param, radial, diverging[:DEG], spiral[:DEG]
+                            recommended field; on a dome whose curvature lines turn around an umbilic,
+                            section), angle:DEG, param, radial, diverging[:DEG], spiral[:DEG],
+                            section[:DEG] (sections by parallel planes standing on the mean plane)
   --lower-bound B           §5.3 lower bound on the step ratio |CM|/|AB|, 0..2 (default 0.3; 0 off)
   --start X,Y,Z             where the base curve L0 starts (a point near the surface; default: the
                             middle of its bounds, projected)

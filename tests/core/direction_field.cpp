@@ -17,7 +17,11 @@ TEST_CASE("direction_field: names parse, bad ones are rejected by name") {
   CHECK(parseFieldSpec("spiral").degrees == 45);
   CHECK(parseFieldSpec("diverging:10").degrees == 10);
   CHECK(fieldSpecName(parseFieldSpec("spiral:30")) == "spiral:30");
-  for (const char* bad : {"angle", "angle:x", "angle:400", "spiral:90", "principal:2", "param:w", "zigzag", ""}) {
+  CHECK(parseFieldSpec("section").kind == FieldKind::Section);
+  CHECK(parseFieldSpec("section").degrees == 0);
+  CHECK(fieldSpecName(parseFieldSpec("section:-45")) == "section:-45");
+  for (const char* bad : {"angle", "angle:x", "angle:400", "spiral:90", "principal:2", "param:w", "zigzag", "section:181",
+                          "section:x", ""}) {
     INFO(bad);
     try {
       parseFieldSpec(bad);
@@ -113,4 +117,31 @@ TEST_CASE("direction_field: a flow line traced in installments is the one traced
   CHECK(meridian.advance(5.0));
   CHECK(meridian.line().end == FlowLine::End::Boundary);
   CHECK(meridian.line().length == traceFlowLine(radial, Family::First, sw.project(Vec3(1, 0, 0)), Vec3(0, 0, 1), 100.0).length);
+}
+
+TEST_CASE("direction_field: plane sections stand on the mean plane, pass the umbilic, and have conjugates") {
+  // A paraboloid of revolution over a square: the mean plane is z = const, so the cutting planes stand upright.
+  const ParametricSurfacePtr dome = makeSurface("elliptic-paraboloid", {{"ra", 1.0}, {"rb", 1.0}});
+  const SurfaceWalker walker(*dome, 0.1);
+  const Vec3 planes = sectionPlaneNormal(*dome, 0);
+  CHECK(std::abs(planes.z()) < 1e-9);  // the cutting planes are vertical
+  CHECK(std::abs(sectionPlaneNormal(*dome, 90).dot(planes)) < 1e-9);
+  const DirectionField section(walker, parseFieldSpec("section"));
+  for (const Vec3& q : {Vec3(0, 0, 0), Vec3(0.6, -0.3, 0), Vec3(-0.8, 0.7, 0)}) {
+    const SurfacePoint p = walker.project(q + Vec3(0, 0, 1));
+    INFO(p.point().transpose());
+    const std::optional<Vec3> f = section.direction(p, Family::First), g = section.direction(p, Family::Conjugate);
+    REQUIRE(f);
+    REQUIRE(g);
+    CHECK(std::abs(f->dot(planes)) < 1e-9);         // within the cutting plane
+    CHECK(std::abs(f->dot(p.g.normal)) < 1e-9);     // and tangent
+    const double II = p.g.k1 * f->dot(p.g.d1) * g->dot(p.g.d1) + p.g.k2 * f->dot(p.g.d2) * g->dot(p.g.d2);
+    CHECK(std::abs(II) < 1e-9 * std::abs(p.g.k1));  // conjugate
+    CHECK(std::abs(f->dot(*g)) < 0.999);             // and not the same direction
+  }
+  // A flow line through the apex (an umbilic) runs straight through it, along the section.
+  const SurfacePoint apex = walker.project(Vec3(0, 0.02, 1));
+  const FlowLine line = traceFlowLine(section, Family::First, apex, Vec3(1, 1, 0), 1.0, false);
+  CHECK(line.end != FlowLine::End::Singularity);
+  for (const SurfacePoint& q : line.points) CHECK(std::abs((q.point() - apex.point()).dot(planes)) < 1e-3);
 }

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <optional>
+#include <sstream>
 
 #include "phex/error.hpp"
 #include "phex/pipeline.hpp"
@@ -12,10 +13,29 @@ using namespace phex;
 namespace {
 
 // An analytic surface sampled by its lattice at about `faces` hexagons (two triangles each), as uploaded OBJ bytes.
-MeshInput sampledUpload(const std::string& surface, int faces) {
-  const ParametricSurfacePtr s = makeSurface(surface);
+MeshInput sampledUpload(const std::string& surface, int faces, const SurfaceParams& params = {}) {
+  const ParametricSurfacePtr s = makeSurface(surface, params);
   const std::string obj = toObj(latticeTriangulation(*s, cellForFaceCount(*s, faces)).mesh);
   return MeshInput{std::vector<std::uint8_t>(obj.begin(), obj.end()), "obj", surface + ".obj"};
+}
+
+// A height field z(x, y) over [-1, 1]^2 as uploaded OBJ bytes: an n x n grid, each square cut along one diagonal.
+template <class Height>
+MeshInput heightFieldUpload(const std::string& name, int n, Height z) {
+  std::ostringstream obj;
+  obj.precision(12);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const double x = -1 + 2.0 * i / n, y = -1 + 2.0 * j / n;
+      obj << "v " << x << ' ' << y << ' ' << z(x, y) << '\n';
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 2, d = a + n + 1;
+      obj << "f " << a << ' ' << b << ' ' << c << "\nf " << a << ' ' << c << ' ' << d << '\n';
+    }
+  const std::string text = obj.str();
+  return MeshInput{std::vector<std::uint8_t>(text.begin(), text.end()), "obj", name + ".obj"};
 }
 
 }  // namespace
@@ -564,4 +584,56 @@ TEST_CASE("pipeline: a lay again keeps its cell within a factor 2 of the area es
   // the square of the ratio, 1/114, and lay 350k triangles (an uploaded cyclide): half the estimate's at most.
   CHECK(phex::relayCell(0.3, 6, 64, 0.5, 0.25) == Approx(0.125));
   CHECK(phex::relayCell(0.1, 1e6, 64, 2.0, 0.1) == Approx(0.2));
+}
+
+TEST_CASE("pipeline: an uploaded dome is laid along plane sections, not around its umbilic") {
+  // A paraboloid of revolution: its apex is an umbilic, and its curvature lines (meridians and parallels) turn
+  // around it. Laid along them, the rows need several systems, whose seams leave irregular vertices and
+  // invalid stars. The sections by parallel planes standing on the dome, with their conjugate lines, are a
+  // conjugate network without a singularity: method auto picks them there.
+  PipelineParams p;
+  p.mesh = sampledUpload("elliptic-paraboloid", 20000, {{"ra", 1.0}, {"rb", 1.0}});
+  p.faces = 1500;
+  const TriangulationStage chosen = triangulate(p);
+  CHECK(chosen.field == "section");
+  CHECK(chosen.triangulation.systems == 1);
+  CHECK(chosen.check.invalidStars.empty());
+  CHECK(chosen.check.regularFraction >= 0.95);
+  CHECK(chosen.check.coverage > 0.85);
+  bool named = false;
+  for (const std::string& n : chosen.triangulation.notes)
+    named |= n.find("plane sections") != std::string::npos && n.find("umbilic") != std::string::npos;
+  CHECK(named);
+  // Asked for by name, the curvature lines are laid as asked, and show why.
+  p.method = TriangulationMethod::Prespecified;
+  const TriangulationStage principal = triangulate(p);
+  CHECK(principal.field == "principal");
+  CHECK(principal.triangulation.systems > 1);
+  CHECK(principal.check.regularFraction < chosen.check.regularFraction);
+  // The whole pipeline on the sections: planar, all hexagons inside.
+  p.method = TriangulationMethod::Auto;
+  const PipelineResult r = runPipeline(p);
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+  CHECK(r.interiorHexagonFraction >= 0.95);
+  CHECK(r.metrics.surfaceDistanceMax <= 0.002);
+}
+
+TEST_CASE("pipeline: a hill laid from its top grows its rows from a ring, not a loop of a few cells") {
+  // A Gaussian hill: an umbilic at the top (the middle of the bounds, where L0 starts), hyperbolic around.
+  // Its curvature lines close into rings around the top; at 5000 faces the one through the start was a loop
+  // of three samples, whose first layers folded onto each other ("the layers fold ... ask for more faces").
+  PipelineParams p;
+  p.mesh = heightFieldUpload("hill", 80, [](double x, double y) { return 0.6 * std::exp(-1.2 * (x * x + y * y)); });
+  p.faces = 5000;
+  const TriangulationStage t = triangulate(p);
+  std::string notes;
+  for (const std::string& n : t.triangulation.notes) notes += n + "\n";
+  INFO(notes);
+  CHECK(notes.find("L0 moved") != std::string::npos);
+  CHECK(t.check.coverage > 0.9);
+  CHECK(t.check.invalidStars.size() <= 5);
+  CHECK(t.triangulation.mesh.V.rows() > 4000);
+  CHECK(t.triangulation.mesh.V.rows() < 6000);
 }

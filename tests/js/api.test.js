@@ -248,6 +248,37 @@ test("method 'auto' picks the field too and says which it used", async () => {
   assert.equal(torus.field, ''); // the torus is laid as a lattice
 });
 
+test("an uploaded dome is laid along plane sections under 'auto', and section:DEG is a field of its own", async () => {
+  // A paraboloid of revolution: its top is an umbilic, around which its curvature lines turn.
+  const n = 60;
+  const lines = [];
+  for (let j = 0; j <= n; j++) {
+    for (let i = 0; i <= n; i++) {
+      const x = -1 + (2 * i) / n, y = -1 + (2 * j) / n;
+      lines.push(`v ${x} ${y} ${0.5 * (1 - 0.35 * (x * x + y * y))}`);
+    }
+  }
+  for (let j = 0; j < n; j++) {
+    for (let i = 0; i < n; i++) {
+      const a = j * (n + 1) + i + 1;
+      lines.push(`f ${a} ${a + 1} ${a + n + 2}`, `f ${a} ${a + n + 2} ${a + n + 1}`);
+    }
+  }
+  const mesh = new TextEncoder().encode(lines.join('\n'));
+  const auto = await phex.run({ mesh, meshFormat: 'obj', faces: 1200 });
+  assert.equal(auto.field, 'section');
+  assert.equal(auto.triangulation.check.invalidStars.length, 0);
+  assert.ok(auto.metrics.interiorHexagonFraction >= 0.95, String(auto.metrics.interiorHexagonFraction));
+  assert.ok(auto.triangulation.notes.some((note) => /plane sections/.test(note) && /umbilic/.test(note)));
+  const turned = await phex.run({ mesh, meshFormat: 'obj', faces: 600, method: 'prespecified', field: 'section:30' });
+  assert.equal(turned.field, 'section:30');
+  for (const field of ['section:abc', 'section:30:1', 'sections']) {
+    const error = await rejection({ mesh, meshFormat: 'obj', field });
+    assert.ok(error instanceof PHexError, field);
+    assert.match(error.message, /field/, field);
+  }
+});
+
 test("duality: 'auto' solves from the tangent dual as well where the Dupin one stalls, and says which won", async () => {
   const auto = await phex.run({ surface: 'cyclide', faces: 3000 });
   assert.equal(auto.duality, 'tangent');

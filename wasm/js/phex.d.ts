@@ -223,7 +223,7 @@ export interface Result {
 export type Method = 'auto' | 'lattice' | 'progressive' | 'prespecified' | 'subdivision';
 
 /** A direction field for pre-specified conjugation (§5.3): see {@link RunParams.field}. */
-export type Field = 'principal' | `angle:${number}` | 'param' | 'radial' | 'diverging' | 'spiral';
+export type Field = 'principal' | `angle:${number}` | 'param' | 'param:u' | 'param:v' | 'radial' | 'diverging' | `diverging:${number}` | 'spiral' | `spiral:${number}` | 'section' | `section:${number}`;
 
 /** A mesh file format accepted as input. */
 export type MeshFormat = 'obj' | 'off' | 'ply' | 'stl';

@@ -34,7 +34,7 @@ export const PARAMETERS = Object.freeze([
   { name: 'surfaceFit', type: 'enum', default: 'on', values: ['on', 'off'], description: "Once planar, shift every face plane along its normal, each node following to the intersection of its three planes, so the faces stay exactly planar while the nodes come closer to the surface ('on'), or leave the planar mesh as the solver ends ('off')." },
   { name: 'splitBoundary', type: 'enum', default: 'on', values: ['on', 'off'], description: "A boundary panel the solver leaves off planar while every face away from it is planar (where a boundary meets a parabolic curve a panel may have no planar shape that does not fold), or one that crosses itself, is cut in two along its best diagonal and the solve goes on ('on'; solve.boundaryPanelsSplit counts them; interior faces left off planar where only folding would make them planar are cut too, counted in solve.interiorFacesSplit: a few, at most 8, or all of them where the solve stalled, up to 1 in 20 faces, or on a surface laid in several systems of rows, up to 1 in 10), or left as it is ('off')." },
   { name: 'method', type: 'enum', default: 'auto', values: ['auto', 'progressive', 'prespecified', 'subdivision', 'lattice'], requires: 'methods', description: "Triangulation: 'auto' (the surface's recommended method, see surfaces(); pre-specified for uploaded meshes), progressive conjugation (§5.2 Method 1), pre-specified conjugation along a field (§5.2 Method 2), Loop subdivision of a convex control mesh (§7), or the parameter lattice." },
-  { name: 'field', type: 'field', default: 'principal', values: ['principal', 'angle:DEG', 'param', 'radial', 'diverging', 'spiral'], requires: 'fields', description: "Direction field of the conjugate methods (§5.2): principal directions (under method 'auto', the surface's recommended field, see surfaces()), a fixed angle to them ('angle:30'), parameter lines, radial, diverging or spiral." },
+  { name: 'field', type: 'field', default: 'principal', values: ['principal', 'angle:DEG', 'param', 'radial', 'diverging', 'spiral', 'section'], requires: 'fields', description: "Direction field of the conjugate methods (§5.2): principal directions (under method 'auto', the surface's recommended field, see surfaces()), a fixed angle to them ('angle:30'), parameter lines, radial, diverging or spiral, or plane sections ('section', 'section:DEG': sections by parallel planes standing on the surface's mean plane, free of singularities on a dome)." },
   { name: 'start', type: 'point', default: null, description: 'Where the conjugate methods start their base curve L0: a point [x, y, z] near the surface. Default (null): chosen by trial lays among the middle of the bounds and the most elliptic and hyperbolic points.' },
   { name: 'direction', type: 'point', default: null, description: 'Which way L0 runs at the start: a vector [x, y, z], projected onto the tangent plane (the nearer family of the network). Default (null): along the smaller normal curvature.' },
   { name: 'lowerBound', type: 'number', default: 0.3, min: 0, max: 2, requires: 'lowerBound', description: 'Lower bound b on the step ratio |CM|/|AB| near parabolic curves (§5.3), applied smoothly; 0 turns it off.' },
@@ -44,7 +44,7 @@ export const PARAMETERS = Object.freeze([
 export const MESH_FORMATS = Object.freeze(['obj', 'off', 'ply', 'stl']);
 
 const PARAMETER = Object.fromEntries(PARAMETERS.map((p) => [p.name, p]));
-const FIELD_PATTERN = /^(principal|param|radial|diverging|spiral|angle:-?\d+(\.\d+)?)$/;
+const FIELD_PATTERN = /^(principal|param(:[uv])?|radial|(diverging|spiral|section)(:-?\d+(\.\d+)?)?|angle:-?\d+(\.\d+)?)$/;
 const INT32_MAX = 2 ** 31 - 1;
 
 function invalid(message) {
@@ -119,7 +119,7 @@ function checkParams(params, capabilities) {
       }
     } else if (spec.type === 'field') {
       if (typeof value !== 'string' || !FIELD_PATTERN.test(value)) {
-        throw invalid(`field must be one of principal, angle:DEG (e.g. angle:30), param, radial, diverging, spiral; got ${describe(value)}`);
+        throw invalid(`field must be one of principal, angle:DEG (e.g. angle:30), param, param:v, radial, diverging[:DEG], spiral[:DEG], section[:DEG]; got ${describe(value)}`);
       }
       checkSupported(spec, value, capabilities);
     } else {

@@ -55,12 +55,16 @@ enum class FieldKind {
   Radial,     // "radial": meridians, the plane sections through the z axis through the centre of the bounds
   Diverging,  // "diverging" / "diverging:DEG": meridians of an axis tilted DEG (default 20) from z towards x;
               // they fan out from one side of the surface to the other (Fig. 20, middle)
-  Spiral      // "spiral" / "spiral:DEG": loxodromes, crossing the meridians of "radial" at DEG (default 45)
+  Spiral,     // "spiral" / "spiral:DEG": loxodromes, crossing the meridians of "radial" at DEG (default 45)
+  Section     // "section" / "section:DEG": plane sections by parallel planes standing on the surface's mean plane,
+              // along its longest extent turned by DEG (default 0) about its normal. Free of singularities on
+              // any height field over that plane, umbilics included (a dome's top), where the curvature lines
+              // of "principal" turn around them; with its conjugate a conjugate network on the elliptic part
 };
 
 struct FieldSpec {
   FieldKind kind = FieldKind::Principal;
-  double degrees = 0;   // Angle: rotation; Diverging: axis tilt; Spiral: angle to the meridians
+  double degrees = 0;   // Angle: rotation; Diverging: axis tilt; Spiral: angle to the meridians; Section: turn
   bool paramV = false;  // Param: follow Pv instead of Pu
 };
 
@@ -68,6 +72,10 @@ struct FieldSpec {
 FieldSpec parseFieldSpec(const std::string& text);
 // The canonical string of a spec, e.g. "angle:30".
 std::string fieldSpecName(const FieldSpec& spec);
+// The normal of the cutting planes of "section:DEG" on `surface`: the planes contain the normal of the
+// samples' mean plane and their longest extent turned by `degrees` about it (axes from principal component
+// analysis, signed so that the largest component of each is positive).
+Vec3 sectionPlaneNormal(const Surface& surface, double degrees);
 
 // The two families of a conjugate network (§5.2): D_F, the field itself, and D_G, its conjugate.
 enum class Family { First, Conjugate };
@@ -103,6 +111,7 @@ class DirectionField {
   const SurfaceWalker& walker_;
   FieldSpec spec_;
   Vec3 axis_, centre_;  // the meridian fields' axis
+  Vec3 sectionNormal_ = Vec3::UnitY();  // "section": the normal of the cutting planes
 };
 
 // A traced flow line: points on the surface from the start, in the traced direction.
