@@ -262,7 +262,7 @@ struct StartChoice {
   double laidCell = 0;
   std::string note;
   // The best trial's score with the price of its irregular vertices, seams included (-inf: no trial), and
-  // how many systems of rows it took: what compares two fields (sectionInstead).
+  // how many systems of rows it took: what compares two fields (plane sections against curvature lines).
   double quality = -std::numeric_limits<double>::infinity();
   int systems = 0;
 };
@@ -503,11 +503,11 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       lo.start = params.start;
       lo.baseDirection = params.direction;
       StartChoice choice;
+      // With a cell given, the trial lays are sized by the faces that cell gives (about), not by the default
+      // face count: a fine cell on an uploaded mesh had its trials laid at half its full size.
+      const int trialSizing = params.cell > 0 ? int(std::lround(facesAtCell(*t.surface, cell))) : params.faces;
       if (!lo.start) {
-        // With a cell given, the trial lays are sized by the faces that cell gives (about), not by the
-        // default face count: a fine cell on an uploaded mesh had its trials laid at half its full size.
-        const int faces = params.cell > 0 ? int(std::lround(facesAtCell(*t.surface, cell))) : params.faces;
-        choice = chooseStart(*t.surface, lo, faces, params.cell > 0, cancel);
+        choice = chooseStart(*t.surface, lo, trialSizing, params.cell > 0, cancel);
         lo.start = choice.start;
         lo.base = choice.base;
       }
@@ -519,8 +519,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
           so.field = "section";
           so.start = params.start;
           so.base = BaseFamily::Auto;
-          const int faces = params.cell > 0 ? int(std::lround(facesAtCell(*t.surface, cell))) : params.faces;
-          StartChoice section = chooseStart(*t.surface, so, faces, params.cell > 0, cancel);
+          StartChoice section = chooseStart(*t.surface, so, trialSizing, params.cell > 0, cancel);
           if (section.quality > choice.quality) {
             std::ostringstream s;
             s << "rows along plane sections (field section) and their conjugate lines, not the curvature lines: "
@@ -605,7 +604,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
     throw Error(ErrorCode::CannotTile,
                 "the triangulation covers only " + std::to_string(int(std::round(100 * t.check.coverage))) +
                     " % of the surface (" + std::to_string(t.triangulation.mesh.F.rows()) +
-                    " triangles): its layers stopped short. Try another field (--field), method or start point");
+                    " triangles): its layers stopped short. Try another direction field, method or start point");
   const bool partial = t.check.coverage >= 0 && t.check.coverage < 0.8;
   if (partial)
     t.triangulation.notes.push_back("the triangulation covers only " + std::to_string(int(std::round(100 * t.check.coverage))) +
