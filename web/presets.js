@@ -55,6 +55,12 @@ export const PRESETS = {
     params: { surface: 'wave-roof', faces: 4000, method: 'prespecified', field: 'principal' },
     view: { color: 'convexity' },
   },
+  // A dome of revolution: its top is an umbilic, around which the curvature lines turn (laid along them: 4
+  // systems, 85 % hexagons and an invalid star at 1500 faces). Plane sections and their conjugate lines are a
+  // conjugate network without that singularity: 100 % hexagons. Method auto picks them on uploaded domes.
+  'Dome of revolution along plane sections (no umbilic singularity)': {
+    params: { surface: 'elliptic-paraboloid', surfaceParams: { ra: 1, rb: 1 }, faces: 1500, method: 'prespecified', field: 'section' },
+  },
   'Two round bumps (umbilics: beyond the method, partly covered)': {
     params: { surface: 'freeform', faces: 2500, method: 'prespecified', field: 'principal' },
   },
