@@ -209,6 +209,7 @@ constexpr double kClearTrial = 0.03;
 constexpr double kParabolicStart = 0.1;
 constexpr int kParabolicStartSamples = 1000;  // a 32 x 32 grid on a parametric surface: within 6 degrees of the circle
 constexpr double kIrregularPrice = 1.0;
+constexpr double kOverlapPrice = 5.0;  // per unit of coverage over 1 (overlapping triangles), in a trial's score
 
 // The most nearly umbilic of some 400 samples of the surface (relative k1 - k2 under kNearUmbilic) where it
 // is curved (not on a plane or a developable), or nullopt.
@@ -305,7 +306,11 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
     // The dual as §6 builds it, without untangling: the count judges the triangulation.
     const int folded = measure(dupinDual(t, surface, false).mesh).selfIntersectingCount;
     const double bad = double(check.invalidStars.size() + folded) / std::max<Eigen::Index>(t.mesh.V.rows(), 1);
-    const double plain = (check.coverage >= 0 ? check.coverage : 1.0) - 5 * bad;
+    // Coverage over 1 is triangles laid over each other, not more surface covered: it counts against the lay
+    // (a half ring closed around its tube, by Method 1 at 2500 faces, scored its overlapping lay at 1.39 and
+    // chose it).
+    const double coverage = check.coverage >= 0 ? check.coverage : 1.0;
+    const double plain = (coverage <= 1 ? coverage : 1 - kOverlapPrice * (coverage - 1)) - 5 * bad;
     // Where the lay took several systems of rows (the bumps), their seams' irregular vertices at a trial's
     // size say little about the full lay's: there coverage and validity alone rank.
     const double irregular = t.systems > 1 ? 0.0 : 1 - check.regularFraction;
