@@ -551,6 +551,15 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       // If that cell cannot be laid, the area estimate's is, as without the trial. Analytic surfaces too: the
       // analytic wave roof laid 17.8k vertices for 10k asked from the area estimate's cell, then a second lay
       // (1077 -> 773 ms at 10k faces; the hyperboloid 1083 -> 575, the vase 991 -> 653).
+      // The lays below are laid without the star repair, which only the kept one gets: a repair moves vertices
+      // and opens a few boundary stars but hardly changes the count the lays are compared by (on the uploaded
+      // bumps at 10k faces, three lays with repairs of about 0.1 s each).
+      bool repaired = false;
+      auto layBare = [&] {
+        LayingOptions bare = lo;
+        bare.repairSweeps = 0;
+        return layTriangulation(*t.surface, bare, progress, cancel);
+      };
       bool fromTrial = params.cell == 0 && trialVertices > 0 && trialCell > cell &&
                        trialPredictsMiss(trialCell, trialVertices, cell, params.faces);
       if (choice.laid) {
@@ -558,17 +567,18 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
         fromTrial = params.cell == 0;
         lo.cell = choice.laidCell;
         t.triangulation = std::move(*choice.laid);
+        repaired = true;
       } else if (fromTrial) {
         lo.cell = predictedCell(*t.surface, trialCell, trialVertices, params.faces, cell);
         try {
-          t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
+          t.triangulation = layBare();
         } catch (const Error& e) {
           if (e.code() != ErrorCode::CannotTile) throw;
           fromTrial = false;
           lo.cell = cell;
         }
       }
-      if (!fromTrial) t.triangulation = layTriangulation(*t.surface, lo, progress, cancel);
+      if (!fromTrial) t.triangulation = layBare();
       // Layers of ideal triangles are not equilateral, and they may leave parts of the surface uncovered, so
       // the vertex count (one hexagon each) differs from the area estimate. When a face count was asked for
       // and missed by more than 10 %, lay again (at most twice): first with the cell scaled by the square root
@@ -591,13 +601,18 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
         if (facesAtCell(*t.surface, lo.cell) > kMaxFaces) break;
         Triangulation again;
         try {
-          again = layTriangulation(*t.surface, lo, progress, cancel);
+          again = layBare();
         } catch (const Error& e) {
           if (e.code() != ErrorCode::CannotTile) throw;
           break;  // keep the lay that worked
         }
         counts[attempt] = double(again.mesh.V.rows());
-        if (miss(again) < miss(t.triangulation)) t.triangulation = std::move(again);
+        if (miss(again) < miss(t.triangulation)) t.triangulation = std::move(again), repaired = false;
+      }
+      if (!repaired && lo.repairSweeps > 0) {
+        checkCancel(cancel);
+        repairStars(t.triangulation, *t.surface, lo.repairSweeps);
+        openInvalidBoundaryStars(t.triangulation, *t.surface);
       }
       if (!startNote.empty()) t.triangulation.notes.insert(t.triangulation.notes.begin(), startNote);
     }
