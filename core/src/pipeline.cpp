@@ -554,7 +554,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       // The lays below are laid without the star repair, which only the kept one gets: a repair moves vertices
       // and opens a few boundary stars but hardly changes the count the lays are compared by (on the uploaded
       // bumps at 10k faces, three lays with repairs of about 0.1 s each).
-      bool repaired = false;
+      bool repaired = false, laid = false;
       auto layBare = [&] {
         LayingOptions bare = lo;
         bare.repairSweeps = 0;
@@ -567,7 +567,8 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
         fromTrial = params.cell == 0;
         lo.cell = choice.laidCell;
         t.triangulation = std::move(*choice.laid);
-        repaired = true;
+        choice.laid.reset();
+        repaired = laid = true;
       } else if (fromTrial) {
         lo.cell = predictedCell(*t.surface, trialCell, trialVertices, params.faces, cell);
         try {
@@ -578,7 +579,8 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
           lo.cell = cell;
         }
       }
-      if (!fromTrial) t.triangulation = layBare();
+      // The start choice's lay is kept with a cell given too (it was laid a second time, the same).
+      if (!fromTrial && !laid) t.triangulation = layBare();
       // Layers of ideal triangles are not equilateral, and they may leave parts of the surface uncovered, so
       // the vertex count (one hexagon each) differs from the area estimate. When a face count was asked for
       // and missed by more than 10 %, lay again (at most twice): first with the cell scaled by the square root
