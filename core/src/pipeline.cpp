@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "phex/direction_field.hpp"
+#include "phex/dupin.hpp"
 #include "phex/error.hpp"
 #include "phex/laying.hpp"
 #include "phex/mesh_io.hpp"
@@ -226,16 +228,23 @@ std::optional<Vec3> umbilicWithinCurvedPart(const Surface& surface) {
   return best;
 }
 
-// The share of some 400 samples of the surface that are clearly hyperbolic (K < 0 with neither principal
-// curvature under 5 % of the other: not a parabolic point blurred by noise).
-double hyperbolicShare(const Surface& surface) {
-  const std::vector<LocalGeometry> samples = surface.samples(400);
-  int hyperbolic = 0;
-  for (const LocalGeometry& g : samples) {
-    const double a = std::abs(g.k1), b = std::abs(g.k2);
-    if (g.k1 * g.k2 < 0 && std::min(a, b) > 0.05 * std::max(a, b)) ++hyperbolic;
+// How much of the surface bends the other way along the plane sections (field "section") than most of it:
+// of some 400 samples where the sections' normal curvature is clearly not zero (over 5 % of kmax), the
+// share of the less common sign. Where it changes sign the section direction is asymptotic somewhere and has
+// no conjugate there (the bumps, a hill's flanks); where it keeps one sign — a dome, or a cushion whose
+// corners are saddles but bend down along the sections all the same — the sections and their conjugate lines
+// make a network with no singularity.
+double sectionBendingMixed(const Surface& surface, double degrees) {
+  const Vec3 planes = sectionPlaneNormal(surface, degrees);
+  int up = 0, down = 0;
+  for (const LocalGeometry& g : surface.samples(400)) {
+    const Vec3 d = g.normal.cross(planes);
+    if (!(d.norm() > 1e-9)) continue;
+    const Vec2 t = tangentVector(g, d.normalized());
+    const double kn = secondFundamentalForm(g, t, t), kmax = std::max(std::abs(g.k1), std::abs(g.k2));
+    if (std::abs(kn) > 0.05 * kmax) ++(kn > 0 ? up : down);
   }
-  return samples.empty() ? 0.0 : double(hyperbolic) / double(samples.size());
+  return up + down == 0 ? 0.0 : double(std::min(up, down)) / double(up + down);
 }
 
 // Plane sections instead of curvature lines (field "section"), where "principal" was not chosen by the user.
@@ -245,11 +254,15 @@ double hyperbolicShare(const Surface& surface) {
 // 0.76 s). The sections by parallel planes standing on the dome and their conjugate lines form a conjugate
 // network with no singularity on an elliptic height field (the same dome: one system, 100 % valence 6, no
 // invalid star, 0.17 s). So where the principal trials took several systems around an umbilic and the
-// surface is (nearly) elliptic throughout, the section trials are laid too, and the field whose best trial
-// scores higher with its irregular vertices counted (seams included) wins. Not on surfaces with hyperbolic
-// parts beyond kSectionHyperbolic (the bumps): there section lines run along asymptotic directions, which
-// have no conjugate, and their trials covered less (an uploaded bumps mesh at 2000 faces: 70 % for 88 %).
-constexpr double kSectionHyperbolic = 0.05;
+// surface bends mostly one way along the sections (sectionBendingMixed under kSectionMixed, along the plan's
+// longest extent or across it), the section trials are laid too, and the field whose best trial scores
+// higher with its irregular vertices counted (seams included) wins. A dome: 0. A cushion, whose corners are
+// saddles, along its diagonals (a square plan's longest extent comes out as one): 0.21, and its sections lay
+// 100 % hexagons where its curvature lines lay 79-92 %. Not where the bending changes sign over much more of
+// the surface (the bumps 0.31-0.45, a hill 0.29): there section lines run along asymptotic directions, which
+// have no conjugate, and their lays covered less (an uploaded bumps mesh at 2000 faces: 70 % for 88 %), so
+// their trials would only cost time.
+constexpr double kSectionMixed = 0.25;
 // Below this share of the surface covered a triangulation is an error (CannotTile), not a result.
 constexpr double kMinCoverage = 0.25;
 
@@ -519,22 +532,25 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       if (given.method == TriangulationMethod::Auto && given.field == "principal" && !params.direction &&
           choice.systems > 1 && params.field == "principal") {
         const std::optional<Vec3> umbilic = umbilicWithinCurvedPart(*t.surface);
-        if (umbilic && hyperbolicShare(*t.surface) < kSectionHyperbolic) {
+        // Of the sections along the plan's longest extent and across it, those bending more nearly one way.
+        const double along = umbilic ? sectionBendingMixed(*t.surface, 0) : 1.0;
+        const double across = umbilic && along > 0 ? sectionBendingMixed(*t.surface, 90) : 1.0;
+        if (std::min(along, across) < kSectionMixed) {
           LayingOptions so = lo;
-          so.field = "section";
+          so.field = across < along ? "section:90" : "section";
           so.start = params.start;
           so.base = BaseFamily::Auto;
           StartChoice section = chooseStart(*t.surface, so, trialSizing, params.cell > 0, cancel);
           if (section.quality > choice.quality) {
             std::ostringstream s;
-            s << "rows along plane sections (field section) and their conjugate lines, not the curvature lines: "
+            s << "rows along plane sections (field " << so.field << ") and their conjugate lines, not the curvature lines: "
                  "these turn around an umbilic (k1 = k2) near ("
               << umbilic->x() << ", " << umbilic->y() << ", " << umbilic->z() << ") and took " << choice.systems
               << " systems of rows in the trial lays, the sections " << section.systems
               << "; scores with irregular vertices counted " << section.quality << " against " << choice.quality;
             section.note = section.note.empty() ? s.str() : section.note + "; " + s.str();
             choice = std::move(section);
-            params.field = lo.field = "section";
+            params.field = lo.field = so.field;
             t.field = params.field;
             lo.start = choice.start;
             lo.base = choice.base;
