@@ -288,6 +288,7 @@ struct JetFit {
   bool ok = false;
   Vec3 normal;
   Eigen::Matrix3d tensor;
+  double residual = 0;  // root mean square of the points' heights off the fitted jet
 };
 
 // Fits z = sum c_ij x^i y^j (i + j <= 3, or 2) to `local` (x, y, z in the frame whose third axis is the
@@ -332,6 +333,16 @@ JetFit fitJet(const std::vector<Vec3>& local) {
   if (!ldlt.compute(A) || !ldlt.rcondAbove(1e-10)) return fit;
   double* c = rhs;
   ldlt.solveInPlace(rhs);
+  double squares = 0;
+  for (int k = 0; k < n; ++k) {
+    const double x = local[k].x() * scale, y = local[k].y() * scale;
+    const double row[10] = {1, x, y, x * x, x * y, y * y, x * x * x, x * x * y, x * y * y, y * y * y};
+    double z = 0;
+    for (int i = 0; i < m; ++i) z += c[i] * row[i];
+    const double r = local[k].z() - z / scale;
+    squares += r * r;
+  }
+  fit.residual = std::sqrt(squares / n);
   // Back to unscaled derivatives at the origin: f_x = c1, f_xx = 2 c3 s, ... (z was scaled too).
   const double fx = c[1], fy = c[2], fxx = 2 * c[3] * scale, fxy = c[4] * scale, fyy = 2 * c[5] * scale;
   // G = J^T J = I + g g^T with g = (fx, fy), det G = 1 + |g|^2; M = G^-1 B G^-1; tensor = J M J^T.
@@ -359,7 +370,14 @@ MeshSurface::MeshSurface(TriMesh mesh, std::string name) : mesh_(std::move(mesh)
     fail(name_, "a triangle refers to a vertex out of range (" + std::to_string(nv) + " vertices)");
   for (int v = 0; v < nv; ++v) bounds_.extend(Vec3(mesh_.V.row(v).transpose()));
   buildTopology();
-  estimateCurvature();
+  const double edge = mesh_.meanEdgeLength();
+  noise_ = edge > 0 ? estimateCurvature(2) / edge : 0.0;
+  if (noise_ > kNoisyMesh) {
+    // The curvature noise goes as residual / radius^2 / sqrt(points), about 1 / rings^3: rings to bring it
+    // down to what 2 rings give at kNoisyMesh.
+    curvatureRings_ = std::clamp(static_cast<int>(std::ceil(2 * std::cbrt(noise_ / kNoisyMesh))), 3, 8);
+    estimateCurvature(curvatureRings_);
+  }
   buildTree();
   buildGrid();
 }
@@ -430,7 +448,7 @@ void MeshSurface::buildTopology() {
   }
 }
 
-void MeshSurface::estimateCurvature() {
+double MeshSurface::estimateCurvature(int minRings) {
   const int nv = vertexCount(), nf = static_cast<int>(mesh_.F.rows());
   // Area-weighted normals: the trial frame of each fit, oriented like the triangles.
   std::vector<Vec3> trialNormal(nv, Vec3::Zero());
@@ -443,6 +461,7 @@ void MeshSurface::estimateCurvature() {
   shapeTensor_.resize(nv);
   std::vector<int> stamp(nv, -1), patch;
   std::vector<Vec3> local;
+  std::vector<double> residual(nv, 0.0);
   for (int v = 0; v < nv; ++v) {
     // The smallest k-ring, k >= 2, with enough points for a cubic jet (capped for safety).
     patch.assign(1, v);
@@ -456,7 +475,7 @@ void MeshSurface::estimateCurvature() {
           if (stamp[w] != v) stamp[w] = v, patch.push_back(w);
         }
       ringBegin = ringEnd;
-      if (patch.size() == ringEnd || (rings >= 2 && static_cast<int>(patch.size()) >= kMinJetPoints)) break;
+      if (patch.size() == ringEnd || (rings >= minRings && static_cast<int>(patch.size()) >= kMinJetPoints)) break;
     }
     const Vec3 p = mesh_.V.row(v);
     Vec3 normal = norm(trialNormal[v]) > 0 ? normalized(trialNormal[v]) : Vec3::UnitZ();
@@ -472,6 +491,7 @@ void MeshSurface::estimateCurvature() {
       JetFit fit = fitJet<10>(local);
       if (!fit.ok) fit = fitJet<6>(local);
       if (!fit.ok) break;  // too few points (a tiny mesh): keep the trial normal, zero curvature
+      residual[v] = fit.residual;
       Eigen::Matrix3d R;
       R << t1, t2, normal;
       // tensor = R fit.tensor R^T, fitted = R fit.normal, summed in a fixed order.
@@ -488,6 +508,9 @@ void MeshSurface::estimateCurvature() {
     shapeTensor_[v] = tensor;
     vertexGeometry_[v] = principalFrame(p, normal, tensor);
   }
+  if (nv == 0) return 0;
+  std::nth_element(residual.begin(), residual.begin() + nv / 2, residual.end());
+  return residual[nv / 2];
 }
 
 LocalGeometry MeshSurface::geometryInTriangle(int f, const Vec3& barycentric) const {

@@ -480,7 +480,43 @@ double relayCell(double cell, double count, int faces, double exponent, double e
   return std::clamp(cell * std::pow(std::max(count, 1.0) / faces, 1 / exponent), 0.5 * estimateCell, 2 * estimateCell);
 }
 
+namespace {
+
+// What a noisy uploaded mesh (MeshSurface::noise) does to the method, said in the notes and in the errors of
+// a lay that fails on it; empty for any other surface.
+std::string noiseNote(const Surface* surface) {
+  const auto* mesh = dynamic_cast<const MeshSurface*>(surface);
+  if (!mesh || !(mesh->noise() > MeshSurface::kNoisyMesh)) return "";
+  std::ostringstream s;
+  s.precision(2);
+  s << "the uploaded mesh is noisy: its vertices lie " << 100 * mesh->noise()
+    << " % of an edge (median) off smooth cubic fits of their neighbourhoods, so its curvature was fitted over "
+    << mesh->curvatureRings() << " rings of neighbours instead of 2; conjugate directions from a noisy mesh "
+       "are unreliable, and its P-Hex nodes are held near a rough surface: smooth the mesh before uploading it "
+       "for better panels";
+  return s.str();
+}
+
+TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel,
+                                 SurfacePtr& made);
+
+}  // namespace
+
 TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel) {
+  SurfacePtr surface;
+  try {
+    return triangulateOn(given, progress, cancel, surface);
+  } catch (const Error& e) {
+    const std::string noise = noiseNote(surface.get());
+    if (e.code() != ErrorCode::CannotTile || noise.empty()) throw;
+    throw Error(ErrorCode::CannotTile, std::string(e.what()) + " (" + noise + ")");
+  }
+}
+
+namespace {
+
+TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel,
+                                 SurfacePtr& made) {
   validate(given);
   PipelineParams params = given;
   params.method = resolveMethod(given);
@@ -508,6 +544,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
     } else {
       t.surface = makeSurface(params.surface, params.surfaceParams);
     }
+    made = t.surface;
     const double cell = checkCell(*t.surface);
     if (params.method == TriangulationMethod::Lattice) {
       t.triangulation = latticeTriangulation(dynamic_cast<const ParametricSurface&>(*t.surface), cell);
@@ -665,8 +702,11 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
       t.triangulation.notes.push_back(s.str());
     }
   }
+  if (const std::string noise = noiseNote(t.surface.get()); !noise.empty()) t.triangulation.notes.push_back(noise);
   return t;
 }
+
+}  // namespace
 
 namespace {
 

@@ -393,3 +393,26 @@ TEST_CASE("mesh_surface: the closest point is the nearest over all triangles, ne
     }
   }
 }
+
+TEST_CASE("mesh_surface: a noisy mesh is recognized and its curvature fitted over wider rings") {
+  // The jittered hyperbolic paraboloid, clean and with every vertex moved along the normal by up to 10 % of
+  // the mean edge (a rough scan): the clean one fits its 2-rings to round-off, the noisy one does not.
+  const ParametricSurfacePtr saddle = makeSurface("hyperbolic-paraboloid");
+  Sampled s = sample(*saddle, 141, 141, 0.3);
+  const MeshSurface clean(s.mesh, "clean");
+  CHECK(clean.noise() < 0.01 * MeshSurface::kNoisyMesh);
+  CHECK(clean.curvatureRings() == 2);
+  const double edge = s.mesh.meanEdgeLength();
+  for (Eigen::Index v = 0; v < s.mesh.V.rows(); ++v)
+    s.mesh.V.row(v) += 0.1 * edge * noise(static_cast<int>(v), 4) * s.exact[v].normal.transpose();
+  const MeshSurface rough(s.mesh, "rough");
+  CHECK(rough.noise() > MeshSurface::kNoisyMesh);
+  CHECK(rough.curvatureRings() > 2);
+  const Accuracy a = accuracy(s, rough);
+  INFO("noise " << rough.noise() << ", rings " << rough.curvatureRings() << ", curvature error median "
+                << a.curvatureMedian << " p95 " << a.curvature95 << ", directions " << a.directionMedian << " deg");
+  // Measured: 6 rings, median curvature error 7 %, directions 1.2 degrees. Over the 2-rings the noise's share
+  // of the curvature is about 27 times that.
+  CHECK(a.curvatureMedian <= 0.15);
+  CHECK(a.directionMedian <= 5.0);
+}

@@ -1,6 +1,7 @@
 #include <catch.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <optional>
 #include <sstream>
 
@@ -666,4 +667,30 @@ TEST_CASE("pipeline: a cushion with saddle corners is laid along plane sections 
   CHECK(t.check.invalidStars.empty());
   CHECK(t.check.regularFraction >= 0.95);
   CHECK(t.check.coverage > 0.85);
+}
+
+TEST_CASE("pipeline: a noisy upload is laid from curvature fitted over wider rings, and the notes say so") {
+  // A saddle whose heights are jittered by up to 12 % of an edge (a rough scan). Fitted over 2-rings its
+  // curvature was mostly noise, and the lay failed ("a segment of the base curve runs along an asymptotic
+  // direction"); a dome so jittered covered 1 % of itself.
+  const int n = 120;
+  auto jitter = [](int i, int j) {
+    std::uint32_t h = std::uint32_t(i) * 73856093u ^ std::uint32_t(j) * 19349663u;
+    h ^= h >> 15, h *= 2246822519u, h ^= h >> 13, h *= 3266489917u, h ^= h >> 16;
+    return h / 2147483648.0 - 1.0;
+  };
+  PipelineParams p;
+  p.mesh = heightFieldUpload("rough-saddle", n, [&](double x, double y) {
+    const int i = int(std::lround((x + 1) * n / 2)), j = int(std::lround((y + 1) * n / 2));
+    return 0.3 * (x * x - y * y) + 0.002 * jitter(i, j);
+  });
+  p.faces = 1500;
+  const PipelineResult r = runPipeline(p);
+  std::string notes;
+  for (const std::string& note : r.triangulation.notes) notes += note + "\n";
+  INFO(notes);
+  CHECK(notes.find("the uploaded mesh is noisy") != std::string::npos);
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.interiorHexagonFraction >= 0.9);
 }

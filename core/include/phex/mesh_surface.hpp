@@ -12,7 +12,10 @@ namespace phex {
 // - at each vertex, the shape operator is estimated by fitting a cubic jet z(x, y) (a degree-3 height
 //   function, falling back to degree 2 where too few points) in the frame of the vertex normal, over
 //   the smallest k-ring (k >= 2) with at least kMinJetPoints vertices, weighted by distance. The normal is
-//   re-estimated from the fit; boundary vertices fit their one-sided neighbourhood the same way;
+//   re-estimated from the fit; boundary vertices fit their one-sided neighbourhood the same way. On a
+//   noisy mesh (the vertices' median distance to their fitted jets over kNoisyMesh of the mean edge: a
+//   scan, jittered heights) the fits are redone over wider rings (noise()), since the noise's share of the
+//   curvature falls as the cube of the patch's radius;
 // - inside a triangle, the vertices' normals and 3D shape tensors (k1 d1 d1^T + k2 d2 d2^T) are
 //   interpolated barycentrically and the tensor is restricted to the tangent plane of the interpolated
 //   normal before its eigen-decomposition, so curvatures and directions vary smoothly (eigenvectors are
@@ -25,6 +28,10 @@ namespace phex {
 class MeshSurface : public Surface {
  public:
   static constexpr int kMinJetPoints = 16;
+  // Median fit residual, relative to the mean edge, above which a mesh counts as noisy. Meshes sampled from
+  // smooth surfaces stay under 1e-4 (lattices of the analytic surfaces, jittered or graded grids of height
+  // fields, coarse ones); heights jittered by 12 % of an edge give 0.04.
+  static constexpr double kNoisyMesh = 0.002;
 
   // `mesh` must be clean (as readMesh / cleanTriMesh return it): throws Error(InvalidInput) for no
   // triangles, an index out of range, a non-finite coordinate, an edge used twice in the same direction
@@ -50,6 +57,11 @@ class MeshSurface : public Surface {
   // Each boundary loop as vertex ids in order, the surface on the left (following the triangles' edges).
   const std::vector<std::vector<int>>& boundaryLoops() const { return boundaryLoops_; }
   bool isBoundaryVertex(int i) const { return onBoundary_[i] != 0; }
+  // How noisy the mesh is: the vertices' median distance to the cubic jets fitted around them (first over
+  // their 2-rings), relative to the mean edge; and over how many rings the curvature was fitted (2, or up to
+  // 8 where noise() is above kNoisyMesh).
+  double noise() const { return noise_; }
+  int curvatureRings() const { return curvatureRings_; }
 
  private:
   struct Node {
@@ -58,7 +70,8 @@ class MeshSurface : public Surface {
     int count = 0;  // leaf: number of triangles; 0 for an inner node
   };
   void buildTopology();
-  void estimateCurvature();
+  // Fits every vertex's jet over at least `rings` rings; returns the median fit residual.
+  double estimateCurvature(int rings);
   void buildTree();
   void buildGrid();
   // Squared distance from p to triangle f, and the barycentric coordinates of the nearest point on it.
@@ -71,6 +84,8 @@ class MeshSurface : public Surface {
 
   TriMesh mesh_;
   std::string name_;
+  double noise_ = 0;
+  int curvatureRings_ = 2;
   Box3 bounds_;
   std::vector<int> neighbourStart_, neighbours_;  // vertex adjacency in compressed rows
   std::vector<char> onBoundary_;
