@@ -256,7 +256,27 @@ async function curvaturePreview() {
   return preview.data;
 }
 
+// Notes that tell a designer the result falls short, or why the method chose what it did against the form:
+// shown open and marked, where the rest (start chosen, layers laid) stay folded.
+const WARNING_NOTE = /covers only|noisy|umbilic|cannot|stopped short|no valid triangle|asymptotic direction|fold onto/i;
+
+/** The triangulation's notes (laying, start choice, repairs, shortfalls) in a folded list under the statistics. */
+function showNotes(notes) {
+  const list = $('run-notes-list');
+  const warnings = notes.filter((note) => WARNING_NOTE.test(note)).length;
+  list.replaceChildren(...notes.map((note) => {
+    const item = document.createElement('li');
+    item.textContent = note;
+    if (WARNING_NOTE.test(note)) item.className = 'warn';
+    return item;
+  }));
+  $('run-notes-summary').textContent = `Notes (${notes.length})${warnings ? ` · ${warnings} to read` : ''}`;
+  $('run-notes').classList.toggle('warn', warnings > 0);
+  $('run-notes').hidden = notes.length === 0;
+}
+
 function showStats({ metrics, solve, timings, method, field, triangulation, duality }) {
+  showNotes(triangulation?.notes ?? []);
   const invalidStars = triangulation?.check?.invalidStars?.length;
   $('triangulation-info').textContent = [method, field, invalidStars === undefined ? null : `${invalidStars} invalid stars`]
     .filter(Boolean)

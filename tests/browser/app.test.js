@@ -177,6 +177,16 @@ test('a paper-figure preset and a surface switch recompute, and land in the URL'
   assert.equal(await page.getAttribute('body', 'data-state'), 'ready');
   assert.match(page.url(), /surface=hyperboloid/);
 
+  // The triangulation's notes are listed under the statistics, the ones a designer should read marked.
+  assert.ok(await page.isVisible('#run-notes'));
+  assert.ok((await page.locator('#run-notes-list li').count()) >= 1);
+  await afterRun(() => page.click('button[data-preset^="Two round bumps"]'));
+  assert.match(await page.textContent('#run-notes-summary'), /Notes \(\d+\) · \d+ to read/);
+  assert.ok((await page.locator('#run-notes-list li.warn').count()) >= 1);
+  await page.click('#run-notes-summary');
+  assert.ok(await page.isVisible('#run-notes-list li.warn'));
+  assert.match((await page.locator('#run-notes-list li.warn').allTextContents()).join('\n'), /umbilic/);
+
   await afterRun(() => page.selectOption('#surface', 'sphere'));
   assert.equal(await page.getAttribute('body', 'data-state'), 'ready');
   assert.match(page.url(), /surface=sphere/);
