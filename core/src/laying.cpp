@@ -326,6 +326,10 @@ class PointGrid {
 // on to maxLayers for minutes. Lays that cover the surface stay far below: thin layers at the §5.3 lower bound
 // hold about three times the estimate, and the uploaded wave roof's ideal triangles 1.8 times.
 constexpr double kVertexExcess = 10;
+// Triangles with centroids in the cells about an apex (27 cells of two cells' width, where a covering holds
+// about 100 and a few sheets of a thin closed surface some hundreds) beyond which overlapsLaid counts the apex
+// as overlapping: layers piled onto each other there.
+constexpr int kPiledTriangles = 2000;
 constexpr double kVertexSlack = 5000;
 // Whether surfaceArea knows the surface's area (a mesh or a parametric surface).
 bool areaKnown(const Surface& surface) {
@@ -673,8 +677,16 @@ bool Laying::overlapsLaid(int a, int b, const SurfacePoint& c) {
     return (d1 > 0 && d2 > 0 && d3 > 0) || (d1 < 0 && d2 < 0 && d3 < 0);
   };
   bool hit = false;
+  int near = 0;
   triangleGrid_.forNear(centre, 2 * o_.cell, [&](int k) {
     if (hit) return;
+    // Far more triangles about the apex than a covering holds there: layers piling onto each other (the
+    // bumps laid along section:45 from their middle piled 25k triangles within a few cells, each apex tested
+    // against all of them, 8.5 s for one trial lay, until the vertex limit stopped it). The apex overlaps.
+    if (++near > kPiledTriangles) {
+      hit = true;
+      return;
+    }
     const Eigen::Vector3i& t = triangles_[k];
     std::array<Vec2, 3> U;
     for (int j = 0; j < 3; ++j) {
