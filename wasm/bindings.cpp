@@ -206,6 +206,7 @@ val resultToJs(const phex::PipelineResult& r) {
   solve.set("boundaryPanelsSplit", r.boundaryPanelsSplit);
   solve.set("interiorFacesSplit", r.interiorFacesSplit);
   solve.set("foldsAllowed", r.foldsAllowed);
+  solve.set("method", std::string(phex::methodName(r.solverUsed)));
   solve.set("surfaceDistanceBefore", r.solve.surfaceDistanceBefore);
   solve.set("surfaceDistanceAfter", r.solve.surfaceDistanceAfter);
   solve.set("freeNodesSettled", r.solve.freeNodesSettled);

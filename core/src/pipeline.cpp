@@ -760,6 +760,14 @@ constexpr std::size_t kStalledShare = 20;
 // no solve could make planar: without the budget four rounds cut 5676 interior faces of 5420, cutting the
 // pieces again, and left a mesh of 6883 triangles.
 constexpr std::size_t kSeamShare = 10;
+// The reference fallback (runPipeline): meshes up to this many faces whose local solve stalled under
+// kReferenceStart, at most kReferenceIterations iterations (Gauss-Newton on the volumes takes about 0.07 s an
+// iteration at 1000 faces here, 0.3 s at 2000). Further off, it did not help where tried: the torus laid
+// across its parabolic circles (7.7e-3 -> 5.3e-2 in 30 iterations at 1944 faces, 12 s), the wave roof laid
+// along its parabolic curve (5.8e-4 -> 1.1e-3 at 2023 faces).
+constexpr int kReferenceFallbackFaces = 1200;
+constexpr int kReferenceIterations = 20;
+constexpr double kReferenceStart = 1e-3;
 // Of two diagonals, one whose ends are already corners of more than three faces is taken only where it leaves
 // the pieces this much nearer planar (per such end), so that cuts spread rather than pile up at a vertex.
 constexpr double kCrowdedCut = 1.0;
@@ -874,6 +882,7 @@ constexpr Eigen::Index kTangentSampling = 4;
 PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
   const auto t0 = std::chrono::steady_clock::now();
   PipelineResult r;
+  r.solverUsed = params.solver;
   StageClock clock(r.timings);
   auto report = [&](const char* stage, double fraction, const std::string& msg) {
     checkCancel(cancel);
@@ -1035,6 +1044,29 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
         static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare) {
       takeSolve(std::move(t));
       r.foldsAllowed = true;
+    }
+  }
+
+  // Where the local solver still stalls a little short of the tolerance on a small mesh, §6's
+  // Gauss-Newton on the tetrahedron volumes (the reference method, Ceres) is run from the same dual, at most
+  // kReferenceIterations iterations, and kept where it converges with no face crossing itself. Method 2 on a
+  // cylinder stalls at 1.5e-6 and on a cone at 3.5e-4 (every face a little off: the local steps stall, where
+  // Gauss-Newton moves all nodes together), and the reference method converges in 9 and 18 iterations (1000
+  // faces: 0.6 and 1.0 s more). `solverUsed` says which solver the result comes from.
+  if (!r.solve.converged && params.solver == PlanarizeMethod::LocalGlobal &&
+      r.dual.mesh.faceCount() <= kReferenceFallbackFaces && r.solve.planarityMax < kReferenceStart) {
+    po.method = PlanarizeMethod::Volumes;
+    const int cap = po.maxIterations;
+    po.maxIterations = std::min(cap, kReferenceIterations);
+    PipelineResult t;
+    solveFrom(t, r.duality, dualOf(r.duality));
+    po.method = params.solver;
+    po.maxIterations = cap;
+    if (t.solve.converged && crossing(t.hex) == 0 &&
+        static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare) {
+      takeSolve(std::move(t));
+      r.foldsAllowed = false;
+      r.solverUsed = PlanarizeMethod::Volumes;
     }
   }
 

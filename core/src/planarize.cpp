@@ -462,7 +462,7 @@ PlanarizeMethod parseMethod(const std::string& name) {
   if (name == "volumes") return PlanarizeMethod::Volumes;
   if (name == "planes") return PlanarizeMethod::Planes;
   if (name == "local") return PlanarizeMethod::LocalGlobal;
-  throw Error(ErrorCode::InvalidParameter, "solver must be 'planes' or 'volumes' (got '" + name + "')");
+  throw Error(ErrorCode::InvalidParameter, "solver must be 'local', 'planes' or 'volumes' (got '" + name + "')");
 }
 
 namespace {

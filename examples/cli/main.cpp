@@ -215,7 +215,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"dualityUsed", phex::dualityName(r.duality)},
           {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
                       {"boundaryPanelsSplit", r.boundaryPanelsSplit}, {"interiorFacesSplit", r.interiorFacesSplit},
-                      {"foldsAllowed", r.foldsAllowed}, {"log", log}}},
+                      {"foldsAllowed", r.foldsAllowed}, {"method", phex::methodName(r.solverUsed)}, {"log", log}}},
           {"surfaceFit", {{"applied", r.solve.surfaceFitted}, {"distanceBefore", r.solve.surfaceDistanceBefore},
                           {"distanceAfter", r.solve.surfaceDistanceAfter}, {"freeNodesSettled", r.solve.freeNodesSettled}}},
           {"milliseconds", timings},

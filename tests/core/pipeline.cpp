@@ -228,6 +228,7 @@ TEST_CASE("pipeline: the start point and laying direction can be set, and are ch
   p.direction = Vec3(0, 1, 0);
   const PipelineResult along = runPipeline(p);
   CHECK(along.metrics.selfIntersectingCount == 0);
+  CHECK(along.interiorFacesSplit == 0);
   CHECK(across.metrics.selfIntersectingCount + (across.solve.converged ? 0 : 1) > 0);
   p.start = Vec3(std::nan(""), 0, 0);
   CHECK_THROWS_WITH(triangulate(p), Catch::Contains("start"));
@@ -693,4 +694,21 @@ TEST_CASE("pipeline: a noisy upload is laid from curvature fitted over wider rin
   CHECK(r.solve.converged);
   CHECK(r.metrics.planarityMax <= 1e-9);
   CHECK(r.interiorHexagonFraction >= 0.9);
+}
+
+TEST_CASE("pipeline: where the local solver stalls on a small mesh, the reference method finishes the solve") {
+  // Method 2 on a cylinder (a developable: every point parabolic) leaves every face a little off planar, and
+  // the local solver stalls at 1.5e-6; §6's Gauss-Newton on the volumes converges in 9 iterations.
+  PipelineParams p;
+  p.surface = "cylinder";
+  p.method = TriangulationMethod::Prespecified;
+  p.faces = 1000;
+  const PipelineResult r = runPipeline(p);
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+  CHECK(r.solverUsed == PlanarizeMethod::Volumes);
+  // A run the local solver finishes keeps it.
+  p.method = TriangulationMethod::Auto;
+  CHECK(runPipeline(p).solverUsed == PlanarizeMethod::LocalGlobal);
 }

@@ -239,6 +239,7 @@ test("method 'auto' picks the field too and says which it used", async () => {
   assert.equal(spec.field, 'param');
   const r = await phex.run({ surface: 'elliptic-paraboloid', faces: 600 });
   assert.equal(r.method, 'prespecified');
+  assert.equal(r.solve.method, 'local');
   assert.equal(r.field, 'param');
   assert.equal(r.triangulation.check.invalidStars.length, 0);
   assert.equal(typeof r.metrics.parabolicFaceCount, 'number');
