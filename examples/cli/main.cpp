@@ -336,6 +336,10 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     if (!reportPath.empty()) phex::writeTextFile(reportPath, rep.dump(2) + "\n");
     std::cout << "triangles " << t.triangulation.mesh.F.rows() << ", interior valence 6 " << t.check.regularFraction * 100
               << " %, invalid stars " << t.check.invalidStars.size() << ", " << ms << " ms\n";
+    if (!t.check.invalidStars.empty())
+      std::cerr << "phex: " << t.check.invalidStars.size()
+                << " stars fail Propositions 4/5 (their dual faces may cross themselves): the triangulation is written "
+                   "as it stands (exit 2); the report lists them and its notes say where laying fell short\n";
     return t.check.invalidStars.empty() ? 0 : 2;
   }
   const phex::PipelineResult r = phex::runPipeline(p, progress);
@@ -353,6 +357,14 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
   std::cout << "faces " << r.metrics.faceCount << ", planarity max " << r.metrics.planarityMax << ", invalid faces "
             << r.metrics.selfIntersectingCount << ", iterations " << r.solve.iterations << ", " << r.totalMilliseconds
             << " ms\n";
+  if (!r.solve.converged)
+    std::cerr << "phex: not converged: planarity max " << r.metrics.planarityMax << " is above the tolerance "
+              << p.tolerance << " after " << r.solve.iterations
+              << " iterations; the mesh is written as it stands (exit 2). The report's notes say where the "
+                 "triangulation fell short; another method, field or face count may do\n";
+  if (r.metrics.selfIntersectingCount > 0)
+    std::cerr << "phex: " << r.metrics.selfIntersectingCount
+              << " faces cross themselves: the mesh is written as it stands (exit 2)\n";
   return (r.solve.converged && r.metrics.selfIntersectingCount == 0) ? 0 : 2;
 }
 

@@ -37,6 +37,24 @@ test('run writes the P-Hex mesh as OBJ and a JSON report', () => {
   assert.equal(faces, rep.mesh.faces);
 });
 
+test('a run that stops short of the tolerance still writes its mesh, exits 2 and says why on stderr', () => {
+  // Method 2 on a cone at 2000 faces: the local solver stalls near 2e-4 (beyond the size where the reference
+  // method takes over); method auto would lay the cone as a lattice.
+  const obj = join(dir, 'cone.obj');
+  const report = join(dir, 'cone.json');
+  const r = phex('run', '--surface', 'cone', '--method', 'prespecified', '--faces', '2000', '--out', obj, '--report', report, '--quiet');
+  assert.equal(r.code, 2, r.err);
+  assert.match(r.err, /not converged: planarity max [0-9.e+-]+ is above the tolerance 1e-0?9/);
+  assert.ok(existsSync(obj));
+  const rep = JSON.parse(readFileSync(report, 'utf8'));
+  assert.equal(rep.solver.converged, false);
+  assert.equal(rep.solver.method, 'local');
+  // At 1000 faces the reference method finishes the solve, and the report says so.
+  const small = phex('run', '--surface', 'cone', '--method', 'prespecified', '--faces', '1000', '--report', report, '--quiet');
+  assert.equal(small.code, 0, small.err);
+  assert.equal(JSON.parse(readFileSync(report, 'utf8')).solver.method, 'volumes');
+});
+
 test('--cell is an alternative to --faces', () => {
   const report = join(dir, 'cell.json');
   assert.equal(phex('run', '--surface', 'sphere', '--cell', '0.2', '--report', report, '--quiet').code, 0);
