@@ -62,14 +62,14 @@ constexpr double kSeedFirstShare = 0.15;
 constexpr int kSeedSamples = 1024;
 constexpr int kMaxSeeds = 6;
 constexpr double kSeedClearance = 0.9;
-constexpr int kShrunkLoop = 16;
+constexpr int kShrunkLoop = 16;  // a closed row of fewer vertices checks its apexes' triangles against laid ones
+// ... seeded around the most nearly umbilic uncovered sample, relative k1 - k2 below this, if there is one.
+constexpr double kSeedUmbilic = 0.05;
 // A closed L0 of fewer samples than kTinyLoop and shorter than kTinyLoopShare of the surface's diagonal (a loop
 // around an umbilic, not a thin tube's cross-section) moves kUmbilicRing cells outwards (baseCurve).
 constexpr std::size_t kTinyLoop = 8;
 constexpr double kTinyLoopShare = 0.1;
-constexpr int kUmbilicRing = 3;  // a closed row of fewer vertices checks its apexes' triangles against laid ones
-// ... seeded around the most nearly umbilic uncovered sample, relative k1 - k2 below this, if there is one.
-constexpr double kSeedUmbilic = 0.05;
+constexpr int kUmbilicRing = 3;
 // Gaps left between systems (and between the fronts of one) are closed by triangles on the laid boundary
 // vertices (fillGaps): edges up to kFillEdge cells, angles whose sine is at least kFillSine; where none fits,
 // a new vertex at least kFillClearance cells from the others. Holes left inside the surface then close with
@@ -540,8 +540,9 @@ Row Laying::baseCurve(const SurfacePoint& given, const Vec3& initial) {
     Vec3 out = start.point() - middle;
     out -= out.dot(start.g.normal) * start.g.normal;
     if (!(out.norm() > 0)) break;
-    const SurfacePoint moved = walker_.project(start.point() + kUmbilicRing * o_.cell * out.normalized(), start);
-    if (walker_.isOutside(start.point() + kUmbilicRing * o_.cell * out.normalized(), moved)) break;
+    const Vec3 target = start.point() + kUmbilicRing * o_.cell * out.normalized();
+    const SurfacePoint moved = walker_.project(target, start);
+    if (walker_.isOutside(target, moved)) break;
     Row wider;
     std::vector<double> widerArcs;
     const FlowLine::End widerEnd = traceBase(moved, initial, wider, widerArcs);
@@ -2250,13 +2251,17 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
                                            "smaller cell");
   }
   trimBoundarySlivers(t);
-  if (options.repairSweeps > 0) {
-    checkCancel(cancel);
-    repairStars(t, surface, options.repairSweeps);
-    openInvalidBoundaryStars(t, surface);
-  }
+  repairLaidTriangulation(t, surface, options.repairSweeps, cancel);
   if (progress) progress({"triangulate", 1.0, std::to_string(t.mesh.F.rows()) + " triangles laid"});
   return t;
+}
+
+void repairLaidTriangulation(Triangulation& triangulation, const Surface& surface, int repairSweeps,
+                             const CancelFlag* cancel) {
+  if (repairSweeps <= 0) return;
+  checkCancel(cancel);
+  repairStars(triangulation, surface, repairSweeps);
+  openInvalidBoundaryStars(triangulation, surface);
 }
 
 }  // namespace phex

@@ -296,6 +296,12 @@ struct JetFit {
 // with J = [X_x X_y], metric G = J^T J and second fundamental form B = -Hess f / sqrt(1 + |grad f|^2)
 // (sign: k > 0 bending away from the normal), the shape tensor on 3D tangent vectors is
 // J G^-1 B G^-1 J^T. Plain loops over fixed-size arrays (the normal equations' lower triangle only).
+// The monomials of a cubic jet at (x, y), in the order of its coefficients (the first 6: the quadratic's).
+inline void jetMonomials(double x, double y, double row[10]) {
+  row[0] = 1, row[1] = x, row[2] = y, row[3] = x * x, row[4] = x * y, row[5] = y * y;
+  row[6] = x * x * x, row[7] = x * x * y, row[8] = x * y * y, row[9] = y * y * y;
+}
+
 template <int m>  // 10 coefficients: cubic; 6: quadratic (fixed sizes: no allocation per vertex)
 JetFit fitJet(const std::vector<Vec3>& local) {
   JetFit fit;
@@ -320,7 +326,8 @@ JetFit fitJet(const std::vector<Vec3>& local) {
     }
     for (int k = begin; k < end; ++k) {
       const double x = local[k].x() * scale, y = local[k].y() * scale, w = weight[k - begin];
-      const double row[10] = {1, x, y, x * x, x * y, y * y, x * x * x, x * x * y, x * y * y, y * y * y};
+      double row[10];
+      jetMonomials(x, y, row);
       const double wz = w * local[k].z() * scale;
       for (int j = 0; j < m; ++j) {
         const double wj = w * row[j];
@@ -336,7 +343,8 @@ JetFit fitJet(const std::vector<Vec3>& local) {
   double squares = 0;
   for (int k = 0; k < n; ++k) {
     const double x = local[k].x() * scale, y = local[k].y() * scale;
-    const double row[10] = {1, x, y, x * x, x * y, y * y, x * x * x, x * x * y, x * y * y, y * y * y};
+    double row[10];
+    jetMonomials(x, y, row);
     double z = 0;
     for (int i = 0; i < m; ++i) z += c[i] * row[i];
     const double r = local[k].z() - z / scale;

@@ -664,11 +664,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
         counts[attempt] = double(again.mesh.V.rows());
         if (miss(again) < miss(t.triangulation)) t.triangulation = std::move(again), repaired = false;
       }
-      if (!repaired && lo.repairSweeps > 0) {
-        checkCancel(cancel);
-        repairStars(t.triangulation, *t.surface, lo.repairSweeps);
-        openInvalidBoundaryStars(t.triangulation, *t.surface);
-      }
+      if (!repaired) repairLaidTriangulation(t.triangulation, *t.surface, lo.repairSweeps, cancel);
       if (!startNote.empty()) t.triangulation.notes.insert(t.triangulation.notes.begin(), startNote);
     }
   }
@@ -1065,7 +1061,6 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     if (t.solve.converged && crossing(t.hex) == 0 &&
         static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare) {
       takeSolve(std::move(t));
-      r.foldsAllowed = false;
       r.solverUsed = PlanarizeMethod::Volumes;
     }
   }

@@ -20,6 +20,16 @@ MeshInput sampledUpload(const std::string& surface, int faces, const SurfacePara
   return MeshInput{std::vector<std::uint8_t>(obj.begin(), obj.end()), "obj", surface + ".obj"};
 }
 
+// Method 1 on half a cyclide ring (uSpan 180), reaching `vSpan` degrees around its tube (360: closed).
+PipelineParams progressiveCyclidePatch(double vSpan, int faces) {
+  PipelineParams p;
+  p.surface = "cyclide";
+  p.surfaceParams = {{"uSpan", 180.0}, {"vSpan", vSpan}};
+  p.method = TriangulationMethod::Progressive;
+  p.faces = faces;
+  return p;
+}
+
 // A height field z(x, y) over [-1, 1]^2 as uploaded OBJ bytes: an n x n grid, each square cut along one diagonal.
 template <class Height>
 MeshInput heightFieldUpload(const std::string& name, int n, Height z) {
@@ -266,12 +276,7 @@ TEST_CASE("pipeline: a guarded solve that stalls is run unguarded, and kept wher
   // Method 1 on a cyclide patch past its parabolic circles: the fold guard stalls the solve from both duals
   // (the faces there only pass through crossed shapes on their way to planar ones); unguarded it converges
   // with no face crossing itself.
-  PipelineParams p;
-  p.surface = "cyclide";
-  p.surfaceParams = {{"uSpan", 180}, {"vSpan", 260}};
-  p.method = TriangulationMethod::Progressive;
-  p.faces = 1500;
-  const PipelineResult r = runPipeline(p);
+  const PipelineResult r = runPipeline(progressiveCyclidePatch(260, 1500));
   INFO("planarity " << r.metrics.planarityMax << ", crossing " << r.metrics.selfIntersectingCount);
   CHECK(r.foldsAllowed);
   CHECK(r.solve.converged);
@@ -644,12 +649,7 @@ TEST_CASE("pipeline: a start choice does not take overlapping triangles for cove
   // Half a cyclide ring, closed around its tube, by Method 1: one family's trial laid triangles over each
   // other (coverage 1.39 at 2500 faces), scored higher than a lay that covers less without overlap, and won;
   // its P-Hex mesh did not converge and lay 20 % of the diagonal off the surface.
-  PipelineParams p;
-  p.surface = "cyclide";
-  p.surfaceParams = {{"uSpan", 180.0}, {"vSpan", 360.0}};
-  p.method = TriangulationMethod::Progressive;
-  p.faces = 2500;
-  const TriangulationStage t = triangulate(p);
+  const TriangulationStage t = triangulate(progressiveCyclidePatch(360, 2500));
   CHECK(t.check.coverage < 1.05);
   CHECK(t.check.coverage > 0.8);
 }

@@ -78,4 +78,10 @@ double stepLowerBound(double r, double b);
 Triangulation layTriangulation(const Surface& surface, const LayingOptions& options, const ProgressFn& progress = {},
                                const CancelFlag* cancel = nullptr);
 
+// The repair layTriangulation ends with (options.repairSweeps > 0): repairStars, then openInvalidBoundaryStars;
+// for a triangulation laid with repairSweeps = 0 and repaired later (the face-count loop repairs only the lay
+// it keeps). Nothing where repairSweeps is 0.
+void repairLaidTriangulation(Triangulation& triangulation, const Surface& surface, int repairSweeps,
+                             const CancelFlag* cancel = nullptr);
+
 }  // namespace phex
