@@ -79,6 +79,8 @@ test('bad input gives a message and exit code 1', () => {
     [['frobnicate'], /unknown command/],
     [['run', '--method', 'random'], /method must be/],
     [['run', '--field', 'sideways'], /sideways/],
+    [['run', '--field', 'section:200'], /section:200.*outside \[-180, 180\]/],
+    [['run', '--solver', 'gauss-newton'], /solver must be 'local', 'planes' or 'volumes'/],
     [['run', '--lower-bound', '5'], /lowerBound must be in \[0, 2\]/],
     [['run', '--format', 'dxf', '--out', join(dir, 'x.dxf')], /--format must be obj, ply or json/],
     [['run', '--mesh', join(dir, 'missing.stl')], /cannot open .*missing\.stl/],
