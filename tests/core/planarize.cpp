@@ -142,6 +142,47 @@ TEST_CASE("planarize: the surface-distance weight mu keeps nodes near the surfac
   CHECK(r.metrics.planarityMax < r.solve.initialPlanarityMax);
 }
 
+TEST_CASE("planarize: a node drifted along a free line running nearly along the surface comes back to its faces") {
+  // Two quads meet only at node 1, so it lies on their two planes alone and is free along their line, which
+  // rises 1 in 10 over the plane z = 0. The node sits 0.8 out along it, 0.08 off the surface and far from the
+  // quads' other corners (the analytic bumps at 100k faces had such a node 28 cells out, 0.3 % of the
+  // diagonal off the surface, after cuts left two thin quads at it): closest-point steps along the line
+  // barely move it, so it goes back along the line towards its faces' other corners instead.
+  const ParametricSurfacePtr plane = makeSurface("plane");
+  PolyMesh quads;
+  quads.V.resize(7, 3);
+  quads.V << -0.1, 0, -0.01,  // quad 0, in the plane z = 0.1 x
+      0.8, 0, 0.08,           // the node, on the line (t, 0, 0.1 t) both planes hold
+      0, 0.1, 0,              //
+      0, -0.1, 0,             //
+      0, -0.05, -0.015,       // quad 1, in the plane z = 0.1 x + 0.3 y
+      0, 0.05, 0.015,         //
+      -0.05, 0, -0.005;
+  quads.addFace({0, 3, 1, 2});
+  quads.addFace({4, 1, 5, 6});
+  // The rest of a mesh, which sets the edge length a drift is measured against: small triangles on the
+  // surface away from the quads.
+  for (int i = 0; i < 40; ++i) {
+    const int a = static_cast<int>(quads.V.rows());
+    quads.V.conservativeResize(a + 3, 3);
+    quads.V.bottomRows(3) << -0.8 + 0.02 * i, -0.8, 0, -0.79 + 0.02 * i, -0.8, 0, -0.8 + 0.02 * i, -0.79, 0;
+    quads.addFace({a, a + 1, a + 2});
+  }
+  REQUIRE(measure(quads, *plane).planarityMax < 1e-12);
+  PlanarizeOptions o;
+  o.surface = plane.get();
+  PolyMesh settled = quads;
+  const PlanarizeReport r = planarize(settled, o);
+  const MeshMetrics m = measure(settled, *plane);
+  const Vec3 node = settled.vertex(1);
+  INFO("node " << node.transpose());
+  CHECK(r.freeNodesSettled >= 1);
+  CHECK(m.planarityMax <= 1e-12);
+  CHECK(m.selfIntersectingCount == 0);
+  CHECK(std::abs(node.z()) < 0.02);  // 0.08 off the surface, and 0.03 after the planes were shifted
+  CHECK(node.x() < 0.4);             // back among its faces' corners, which lie within 0.1 of the origin
+}
+
 TEST_CASE("planarize: a node on fewer than three face planes is put nearest the surface along its free directions") {
   // A quad in the tangent plane x = 1 of the unit sphere, one corner far out (0.22 off the sphere): each
   // corner lies on one plane only, so it may move within that plane without the quad leaving it.
