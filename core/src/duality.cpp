@@ -303,7 +303,10 @@ int untangleDual(DualMesh& dual, const TriMesh& T, const std::vector<LocalGeomet
 // point is moved back across, onto the line of that edge in the triangle's plane. It leaves the triangle's
 // tangent planes by as much, which the solve takes up. On the uploaded bumps at 3500 faces such a point lay
 // 0.036 beyond the boundary and ended 1.1 % of the diagonal off the surface; moved back, 0.06 %.
-void keepWithinBoundary(const TriMesh& T, const VertexRings& rings, const std::vector<LocalGeometry>& geo, Points& U) {
+// With `alongRulings` (a developable's shared ruling planes, shareRulingPlanes) the point moves along the
+// direction its three planes leave free, where that runs across the edge, so it stays on all three.
+void keepWithinBoundary(const TriMesh& T, const VertexRings& rings, const std::vector<LocalGeometry>& geo, Points& U,
+                        bool alongRulings = false) {
   auto pullBack = [&](int f, int a, int b) {  // boundary edge a -> b of triangle f
     int o = 0;
     while (T.F(f, o) == a || T.F(f, o) == b) ++o;
@@ -317,7 +320,19 @@ void keepWithinBoundary(const TriMesh& T, const VertexRings& rings, const std::v
     in /= across;
     const Vec3 x = U.row(f).transpose();
     const double depth = in.dot(x - pa);
-    if (depth < 0) U.row(f) = (x - depth * in).transpose();
+    if (!(depth < 0)) return;
+    if (alongRulings) {
+      Eigen::Matrix3d N;
+      N << geo[a].normal.transpose(), geo[b].normal.transpose(), geo[T.F(f, o)].normal.transpose();
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(N, Eigen::ComputeFullV);
+      const Vec3 free = svd.matrixV().col(2);
+      const double s = svd.singularValues()(2), slope = in.dot(free);
+      if (s <= kStraddlingPlanes * svd.singularValues()(0) && std::abs(slope) >= 0.3) {
+        U.row(f) = (x - (depth / slope) * free).transpose();
+        return;
+      }
+    }
+    U.row(f) = (x - depth * in).transpose();
   };
   const int nv = static_cast<int>(T.V.rows());
   for (int v = 0; v < nv; ++v) {
@@ -332,13 +347,82 @@ void keepWithinBoundary(const TriMesh& T, const VertexRings& rings, const std::v
   }
 }
 
+// On a developable (§3, §5.3) the tangent plane is the same all along a ruling, so the hexagons of the
+// vertices of one ruling lie in one plane, and each dual point of a strip between two rulings on the line
+// where their planes meet: quad-shaped hexagons, planar by construction. The tangent planes a mesh's
+// normals give differ a little along a ruling, and then the dual points scatter off those lines and the
+// local solver crawls (the planes at a node nearly share a line). So where the triangulation's vertices are
+// all but a few parabolic (one principal curvature under 1 % of the other), the vertices joined by edges
+// along their zero-curvature direction (within about 10 degrees of it at one end, and off its line by at
+// most a tenth of the mean edge) are grouped into rulings, and each group of two or more shares one plane:
+// through their mean point, normal to their mean normal; the vertices move onto it. Returns how many groups
+// share a plane. On an uploaded cylinder and cone laid by Method 2 every face comes out planar to round-off
+// (0 solver iterations from 1000 to 10000 faces), where the local solver stalled at 1e-5 to 1e-3.
+constexpr double kRulingCosine = 0.985;  // about 10 degrees
+int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo) {
+  const int nv = static_cast<int>(geo.size());
+  int curved = 0, parabolic = 0;
+  double h = T.meanEdgeLength();
+  auto zeroDirection = [](const LocalGeometry& g) { return std::abs(g.k1) < std::abs(g.k2) ? g.d1 : g.d2; };
+  for (const LocalGeometry& g : geo) {
+    const double kmax = std::max(std::abs(g.k1), std::abs(g.k2)), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
+    if (!(kmax * h > 1e-9)) continue;
+    ++curved;
+    parabolic += kmin <= 0.01 * kmax;
+  }
+  if (nv == 0 || curved < nv / 2 || parabolic < 0.95 * curved) return 0;
+  std::vector<int> parent(nv);
+  for (int v = 0; v < nv; ++v) parent[v] = v;
+  auto find = [&](int v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (Eigen::Index f = 0; f < T.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = T.F(f, k), b = T.F(f, (k + 1) % 3);  // interior edges twice, boundary edges once
+      // Along the zero-curvature direction at one end at least (a boundary vertex's estimate may be off), and
+      // off that line by a sliver of an edge only (two rulings' ends closer than an edge are two rows).
+      const Vec3 e = geo[b].point - geo[a].point;
+      const double length = e.norm();
+      for (const int end : {a, b}) {
+        const Vec3 d = zeroDirection(geo[end]);
+        if (length > 0 && std::abs(e.dot(d)) >= kRulingCosine * length && e.cross(d).norm() <= 0.1 * h) {
+          parent[find(a)] = find(b);
+          break;
+        }
+      }
+    }
+  std::vector<int> count(nv, 0);
+  std::vector<Vec3> sumPoint(nv, Vec3::Zero()), sumNormal(nv, Vec3::Zero());
+  for (int v = 0; v < nv; ++v) {
+    const int r = find(v);
+    ++count[r];
+    sumPoint[r] += geo[v].point;
+    // Normals oriented alike (a mesh's are, but not necessarily to round-off at a fold).
+    sumNormal[r] += geo[v].normal.dot(geo[r].normal) < 0 ? Vec3(-geo[v].normal) : geo[v].normal;
+  }
+  int shared = 0;
+  for (int v = 0; v < nv; ++v) {
+    const int r = find(v);
+    if (count[r] < 2 || !(sumNormal[r].norm() > 0)) continue;
+    shared += r == v;
+    Vec3 n = sumNormal[r].normalized();
+    if (n.dot(geo[v].normal) < 0) n = -n;
+    const Vec3 c = sumPoint[r] / count[r];
+    geo[v].normal = n;
+    geo[v].point -= n.dot(geo[v].point - c) * n;  // onto the shared plane
+  }
+  return shared;
+}
+
 // The dual mesh with every triangle's point placed by `place(f, frame, x)`, which returns false where it fell
 // back to the centroid (x is then the centroid).
 template <typename Place>
 DualMesh dualWith(const Triangulation& tri, const Surface& surface, Place place, bool untangle = false) {
   const TriMesh& T = tri.mesh;
   const int nf = static_cast<int>(T.F.rows());
-  const std::vector<LocalGeometry> geo = vertexGeometry(tri, surface);
+  std::vector<LocalGeometry> geo = vertexGeometry(tri, surface);
+  const bool rulings = shareRulingPlanes(T, geo) > 0;
   const VertexRings rings = vertexRings(T);
   Points U(nf, 3);
   int fallbacks = 0;
@@ -348,7 +432,7 @@ DualMesh dualWith(const Triangulation& tri, const Surface& surface, Place place,
     fallbacks += !place(geo, f, fr, x);
     U.row(f) = x.transpose();
   }
-  keepWithinBoundary(T, rings, geo, U);
+  keepWithinBoundary(T, rings, geo, U, rulings);
   DualMesh dual = assembleDual(T, rings, U, geo, fallbacks);
   if (untangle) dual.untangled = untangleDual(dual, T, geo);
   return dual;
@@ -400,6 +484,14 @@ DualMesh dupinDual(const Triangulation& tri, const Surface& surface, bool untang
       }
     }
     // Where the Dupin conic is undefined the tangent planes may still meet well; §6's centroid is the last resort.
+    // On a developable (K = 0 at every corner, curved) two corners on one ruling share their tangent plane, up
+    // to the estimate on an uploaded mesh: the point goes on the line where it meets the third corner's,
+    // nearest the centroid, the ruling direction left free (kStraddlingPlanes) as at a parabolic curve.
+    if (parabolic && !straddles && largestK * h2 < 1e-8) {
+      double kmax = 0;
+      for (int c = 0; c < 3; ++c) kmax = std::max({kmax, std::abs(g[c]->k1), std::abs(g[c]->k2)});
+      if (kmax * fr.longestEdge > 1e-6) return tangentPoint(geo, T, f, fr, x, kStraddlingPlanes);
+    }
     return tangentPoint(geo, T, f, fr, x);
   }, untangle);
 }

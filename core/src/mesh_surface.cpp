@@ -386,6 +386,23 @@ MeshSurface::MeshSurface(TriMesh mesh, std::string name) : mesh_(std::move(mesh)
     curvatureRings_ = std::clamp(static_cast<int>(std::ceil(2 * std::cbrt(noise_ / kNoisyMesh))), 3, 8);
     estimateCurvature(curvatureRings_);
   }
+  // A developable (an uploaded barrel vault, cone, ...): the curvature that vanishes comes out of the fits as
+  // a trace (1e-5 to 1e-3 of the other on a sampled cylinder and cone), enough to make every point elliptic
+  // or hyperbolic with a Dupin conic stretched along the ruling: ideal steps of a few hundredths of a cell,
+  // stars judged by Props 4/5 where they cannot be, tangent planes that differ along a ruling. Where nearly
+  // every curved vertex has one principal curvature under kDevelopableRatio of the other, that one is taken
+  // as 0 there (vertices and points within triangles alike), as on the analytic developables (§5.3).
+  const double diagonal = bounds_.diagonal().norm();
+  int curved = 0, flat = 0;
+  for (const LocalGeometry& g : vertexGeometry_) {
+    const double kmax = std::max(std::abs(g.k1), std::abs(g.k2)), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
+    if (!(kmax * diagonal > kCurvedScale)) continue;
+    ++curved;
+    flat += kmin <= kDevelopableRatio * kmax;
+  }
+  developable_ = curved >= 0.5 * nv && flat >= kDevelopableShare * curved;
+  if (developable_)
+    for (LocalGeometry& g : vertexGeometry_) snapDevelopable(g);
   buildTree();
   buildGrid();
 }
@@ -534,7 +551,14 @@ LocalGeometry MeshSurface::geometryInTriangle(int f, const Vec3& barycentric) co
     const Vec3 a = mesh_.V.row(mesh_.F(f, 0)), b = mesh_.V.row(mesh_.F(f, 1)), c = mesh_.V.row(mesh_.F(f, 2));
     normal = (b - a).cross(c - a);
   }
-  return principalFrame(point, normalized(normal), tensor);
+  LocalGeometry g = principalFrame(point, normalized(normal), tensor);
+  if (developable_) snapDevelopable(g);
+  return g;
+}
+
+void MeshSurface::snapDevelopable(LocalGeometry& g) const {
+  if (std::abs(g.k2) <= kDevelopableRatio * std::abs(g.k1)) g.k2 = 0;
+  else if (std::abs(g.k1) <= kDevelopableRatio * std::abs(g.k2)) g.k1 = 0;
 }
 
 void MeshSurface::buildTree() {

@@ -482,6 +482,22 @@ double relayCell(double cell, double count, int faces, double exponent, double e
 
 namespace {
 
+// Whether `surface` is a developable: an uploaded mesh that MeshSurface found one (its vanishing curvature
+// then set to 0), or an analytic surface with one principal curvature under MeshSurface::kDevelopableRatio of
+// the other at MeshSurface::kDevelopableShare of 400 samples where it is curved.
+bool isDevelopable(const Surface& surface) {
+  if (const auto* mesh = dynamic_cast<const MeshSurface*>(&surface)) return mesh->developable();
+  const double diagonal = surface.bounds().diagonal().norm();
+  int curved = 0, flat = 0;
+  for (const LocalGeometry& g : surface.samples(400)) {
+    const double kmax = std::max(std::abs(g.k1), std::abs(g.k2)), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
+    if (!(kmax * diagonal > MeshSurface::kCurvedScale)) continue;
+    ++curved;
+    flat += kmin <= MeshSurface::kDevelopableRatio * kmax;
+  }
+  return curved >= 200 && flat >= MeshSurface::kDevelopableShare * curved;
+}
+
 // What a noisy uploaded mesh (MeshSurface::noise) does to the method, said in the notes and in the errors of
 // a lay that fails on it; empty for any other surface.
 std::string noiseNote(const Surface* surface) {
@@ -525,6 +541,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
   t.method = params.method;
   if (params.method == TriangulationMethod::Progressive || params.method == TriangulationMethod::Prespecified)
     t.field = params.field;
+  std::string developableNote;
   auto checkCell = [&](const Surface& surface) {
     const double cell = params.cell > 0 ? params.cell : cellForFaceCount(surface, params.faces);
     const double expected = facesAtCell(surface, cell);
@@ -545,6 +562,17 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       t.surface = makeSurface(params.surface, params.surfaceParams);
     }
     made = t.surface;
+    // §5.3: on a developable K = 0 everywhere, so Method 1 has no ideal triangle to take a step from; its
+    // rows, stepped off a ruling by a fixed ratio, drift off the rulings where these fan out (a cone), and
+    // the conjugate of a drifting row is the ruling itself, along the row: 89-92 % hexagons on the cone, not
+    // converged, 3 s at 2500 faces. The paper tiles developables along their rulings whatever the method,
+    // which Method 2 along the principal field does (100 %, planar as laid).
+    if (params.method == TriangulationMethod::Progressive && params.field == "principal" && isDevelopable(*t.surface)) {
+      params.method = t.method = TriangulationMethod::Prespecified;
+      developableNote =
+          "progressive conjugation (Method 1) has no ideal triangles on a developable (K = 0 everywhere, §5.3): "
+          "laid along its rulings by Method 2 (pre-specified conjugation, principal field) instead";
+    }
     const double cell = checkCell(*t.surface);
     if (params.method == TriangulationMethod::Lattice) {
       t.triangulation = latticeTriangulation(dynamic_cast<const ParametricSurface&>(*t.surface), cell);
@@ -699,6 +727,13 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     }
   }
   if (const std::string noise = noiseNote(t.surface.get()); !noise.empty()) t.triangulation.notes.push_back(noise);
+  if (!developableNote.empty()) t.triangulation.notes.insert(t.triangulation.notes.begin(), developableNote);
+  if (const auto* mesh = dynamic_cast<const MeshSurface*>(t.surface.get()); mesh && mesh->developable())
+    t.triangulation.notes.push_back(
+        "the uploaded mesh is a developable (one principal curvature under 1 % of the other nearly everywhere): "
+        "that curvature is taken as 0, as on an analytic cylinder or cone, so the rows run along its rulings "
+        "(§5.3), and the dual gives the vertices of each ruling one shared tangent plane, so its hexagons are "
+        "quad-shaped and planar as laid (§3)");
   return t;
 }
 
@@ -756,14 +791,6 @@ constexpr std::size_t kStalledShare = 20;
 // no solve could make planar: without the budget four rounds cut 5676 interior faces of 5420, cutting the
 // pieces again, and left a mesh of 6883 triangles.
 constexpr std::size_t kSeamShare = 10;
-// The reference fallback (runPipeline): meshes up to this many faces whose local solve stalled under
-// kReferenceStart, at most kReferenceIterations iterations (Gauss-Newton on the volumes takes about 0.07 s an
-// iteration at 1000 faces here, 0.3 s at 2000). Further off, it did not help where tried: the torus laid
-// across its parabolic circles (7.7e-3 -> 5.3e-2 in 30 iterations at 1944 faces, 12 s), the wave roof laid
-// along its parabolic curve (5.8e-4 -> 1.1e-3 at 2023 faces).
-constexpr int kReferenceFallbackFaces = 1200;
-constexpr int kReferenceIterations = 20;
-constexpr double kReferenceStart = 1e-3;
 // Of two diagonals, one whose ends are already corners of more than three faces is taken only where it leaves
 // the pieces this much nearer planar (per such end), so that cuts spread rather than pile up at a vertex.
 constexpr double kCrowdedCut = 1.0;
@@ -1040,28 +1067,6 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
         static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare) {
       takeSolve(std::move(t));
       r.foldsAllowed = true;
-    }
-  }
-
-  // Where the local solver still stalls a little short of the tolerance on a small mesh, §6's
-  // Gauss-Newton on the tetrahedron volumes (the reference method, Ceres) is run from the same dual, at most
-  // kReferenceIterations iterations, and kept where it converges with no face crossing itself. Method 2 on a
-  // cylinder stalls at 1.5e-6 and on a cone at 3.5e-4 (every face a little off: the local steps stall, where
-  // Gauss-Newton moves all nodes together), and the reference method converges in 9 and 18 iterations (1000
-  // faces: 0.6 and 1.0 s more). `solverUsed` says which solver the result comes from.
-  if (!r.solve.converged && params.solver == PlanarizeMethod::LocalGlobal &&
-      r.dual.mesh.faceCount() <= kReferenceFallbackFaces && r.solve.planarityMax < kReferenceStart) {
-    po.method = PlanarizeMethod::Volumes;
-    const int cap = po.maxIterations;
-    po.maxIterations = std::min(cap, kReferenceIterations);
-    PipelineResult t;
-    solveFrom(t, r.duality, dualOf(r.duality));
-    po.method = params.solver;
-    po.maxIterations = cap;
-    if (t.solve.converged && crossing(t.hex) == 0 &&
-        static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare) {
-      takeSolve(std::move(t));
-      r.solverUsed = PlanarizeMethod::Volumes;
     }
   }
 

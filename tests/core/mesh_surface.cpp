@@ -416,3 +416,26 @@ TEST_CASE("mesh_surface: a noisy mesh is recognized and its curvature fitted ove
   CHECK(a.curvatureMedian <= 0.15);
   CHECK(a.directionMedian <= 5.0);
 }
+
+TEST_CASE("mesh_surface: a developable is recognized and its vanishing curvature taken as 0") {
+  // A jittered cylinder and cone: the fits leave a trace of the vanishing curvature, which MeshSurface sets to
+  // 0 so that the method treats them as the analytic developables (every point parabolic). A torus, sphere
+  // band and saddle are not developables and keep their curvature.
+  for (const std::string name : {"cylinder", "cone"}) {
+    const Sampled s = sample(*makeSurface(name), 200, 100, 0.3);
+    const MeshSurface m(s.mesh, name);
+    INFO(name);
+    CHECK(m.developable());
+    int zero = 0;
+    for (const LocalGeometry& g : m.vertexGeometries()) zero += g.k1 == 0 || g.k2 == 0;
+    CHECK(zero >= 0.95 * m.vertexCount());
+    const LocalGeometry inside = m.closestPoint(m.vertexGeometry(5000).point + 0.01 * m.vertexGeometry(5000).normal);
+    CHECK((inside.k1 == 0 || inside.k2 == 0));
+    CHECK(std::max(std::abs(inside.k1), std::abs(inside.k2)) > 0.3);
+  }
+  for (const std::string name : {"torus", "sphere", "hyperbolic-paraboloid"}) {
+    const MeshSurface m(sample(*makeSurface(name), 160, 80, 0.3).mesh, name);
+    INFO(name);
+    CHECK_FALSE(m.developable());
+  }
+}

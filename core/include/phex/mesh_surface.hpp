@@ -62,6 +62,13 @@ class MeshSurface : public Surface {
   // 8 where noise() is above kNoisyMesh).
   double noise() const { return noise_; }
   int curvatureRings() const { return curvatureRings_; }
+  // Whether the mesh is a developable: one principal curvature under kDevelopableRatio of the other at
+  // kDevelopableShare of the vertices where it is curved (over kCurvedScale / diagonal). That curvature is
+  // then 0 wherever it is under kDevelopableRatio of the other, as on an analytic developable.
+  bool developable() const { return developable_; }
+  static constexpr double kDevelopableRatio = 0.01;
+  static constexpr double kDevelopableShare = 0.95;
+  static constexpr double kCurvedScale = 1e-6;
 
  private:
   struct Node {
@@ -85,6 +92,8 @@ class MeshSurface : public Surface {
   TriMesh mesh_;
   std::string name_;
   double noise_ = 0;
+  bool developable_ = false;
+  void snapDevelopable(LocalGeometry& g) const;
   int curvatureRings_ = 2;
   Box3 bounds_;
   std::vector<int> neighbourStart_, neighbours_;  // vertex adjacency in compressed rows

@@ -102,9 +102,7 @@ struct PipelineResult {
   // short of the tolerance, and without it the mesh converged with no face crossing itself — the way to
   // planarity passed through steps the guard refused (Method 1 on cyclide patches past the parabolic circles).
   bool foldsAllowed = false;
-  // The solver the kept result comes from: the one asked for, or Volumes where the local solver stalled a little
-  // short of the tolerance on a small mesh (at most 1200 faces, planarity under 1e-3) and §6's reference
-  // method reached it.
+  // The solver the kept result comes from (the one asked for).
   PlanarizeMethod solverUsed = PlanarizeMethod::LocalGlobal;
   std::vector<StageTiming> timings;
   double totalMilliseconds = 0.0;
