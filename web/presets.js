@@ -61,6 +61,11 @@ export const PRESETS = {
   'Dome of revolution along plane sections (no umbilic singularity)': {
     params: { surface: 'elliptic-paraboloid', surfaceParams: { ra: 1, rb: 1 }, faces: 1500, method: 'prespecified', field: 'section' },
   },
+  // A developable (§3, §5.3): K = 0 everywhere, rows along the rulings; the hexagons of a ruling's vertices
+  // share its tangent plane, so they are quad-shaped and planar as laid (0 solver iterations).
+  'Cone along its rulings (developable: quad-shaped hexagons)': {
+    params: { surface: 'cone', faces: 1500, method: 'prespecified', field: 'principal' },
+  },
   'Two round bumps (umbilics: beyond the method, partly covered)': {
     params: { surface: 'freeform', faces: 2500, method: 'prespecified', field: 'principal' },
   },
