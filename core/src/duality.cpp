@@ -352,7 +352,7 @@ void keepWithinBoundary(const TriMesh& T, const VertexRings& rings, const std::v
 // where their planes meet: quad-shaped hexagons, planar by construction. The tangent planes a mesh's
 // normals give differ a little along a ruling, and then the dual points scatter off those lines and the
 // local solver crawls (the planes at a node nearly share a line). So where the triangulation's vertices are
-// all but a few parabolic (one principal curvature under 1 % of the other), the vertices joined by edges
+// all but a few parabolic (kDevelopableRatio, kDevelopableShare), the vertices joined by edges
 // along their zero-curvature direction (within about 10 degrees of it at one end, and off its line by at
 // most a tenth of the mean edge) are grouped into rulings, and each group of two or more shares one plane:
 // through their mean point, normal to their mean normal; the vertices move onto it. Returns how many groups
@@ -362,15 +362,15 @@ constexpr double kRulingCosine = 0.985;  // about 10 degrees
 int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo) {
   const int nv = static_cast<int>(geo.size());
   int curved = 0, parabolic = 0;
-  double h = T.meanEdgeLength();
+  const double h = T.meanEdgeLength();
   auto zeroDirection = [](const LocalGeometry& g) { return std::abs(g.k1) < std::abs(g.k2) ? g.d1 : g.d2; };
   for (const LocalGeometry& g : geo) {
     const double kmax = std::max(std::abs(g.k1), std::abs(g.k2)), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
     if (!(kmax * h > 1e-9)) continue;
     ++curved;
-    parabolic += kmin <= 0.01 * kmax;
+    parabolic += kmin <= kDevelopableRatio * kmax;
   }
-  if (nv == 0 || curved < nv / 2 || parabolic < 0.95 * curved) return 0;
+  if (nv == 0 || curved < nv / 2 || parabolic < kDevelopableShare * curved) return 0;
   std::vector<int> parent(nv);
   for (int v = 0; v < nv; ++v) parent[v] = v;
   auto find = [&](int v) {

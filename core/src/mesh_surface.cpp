@@ -7,6 +7,7 @@
 #include <limits>
 #include <numeric>
 
+#include "phex/dupin.hpp"
 #include "phex/error.hpp"
 
 namespace phex {

@@ -483,8 +483,8 @@ double relayCell(double cell, double count, int faces, double exponent, double e
 namespace {
 
 // Whether `surface` is a developable: an uploaded mesh that MeshSurface found one (its vanishing curvature
-// then set to 0), or an analytic surface with one principal curvature under MeshSurface::kDevelopableRatio of
-// the other at MeshSurface::kDevelopableShare of 400 samples where it is curved.
+// then set to 0), or an analytic surface with one principal curvature under kDevelopableRatio of
+// the other at kDevelopableShare of 400 samples where it is curved.
 bool isDevelopable(const Surface& surface) {
   if (const auto* mesh = dynamic_cast<const MeshSurface*>(&surface)) return mesh->developable();
   const double diagonal = surface.bounds().diagonal().norm();
@@ -493,9 +493,9 @@ bool isDevelopable(const Surface& surface) {
     const double kmax = std::max(std::abs(g.k1), std::abs(g.k2)), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
     if (!(kmax * diagonal > MeshSurface::kCurvedScale)) continue;
     ++curved;
-    flat += kmin <= MeshSurface::kDevelopableRatio * kmax;
+    flat += kmin <= kDevelopableRatio * kmax;
   }
-  return curved >= 200 && flat >= MeshSurface::kDevelopableShare * curved;
+  return curved >= 200 && flat >= kDevelopableShare * curved;
 }
 
 // What a noisy uploaded mesh (MeshSurface::noise) does to the method, said in the notes and in the errors of

@@ -35,6 +35,12 @@ enum class PointType { Elliptic, Hyperbolic, Parabolic, Planar };
 // tolerance is dimensionless (1e-6 is a reasonable default); lengthScale > 0 is a length.
 PointType classify(const LocalGeometry& g, double tolerance, double lengthScale);
 
+// A developable (§3: K = 0 throughout): one principal curvature under kDevelopableRatio of the other at
+// kDevelopableShare of the points where the surface is curved. Used by MeshSurface::developable, by the dual's
+// shared ruling planes and by the hand-over of Method 1 to Method 2 on developables.
+constexpr double kDevelopableRatio = 0.01;
+constexpr double kDevelopableShare = 0.95;
+
 // The direction conjugate to the tangent direction t (2D, any length): the unit t' with II(t, t') = 0, i.e.
 // k1 t.x t'.x + k2 t.y t'.y = 0, oriented counterclockwise from t (t x t' >= 0 seen from the normal).
 // - An asymptotic t (K <= 0, II(t, t) = 0) is self-conjugate: the result is t normalized.

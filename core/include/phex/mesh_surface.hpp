@@ -66,8 +66,6 @@ class MeshSurface : public Surface {
   // kDevelopableShare of the vertices where it is curved (over kCurvedScale / diagonal). That curvature is
   // then 0 wherever it is under kDevelopableRatio of the other, as on an analytic developable.
   bool developable() const { return developable_; }
-  static constexpr double kDevelopableRatio = 0.01;
-  static constexpr double kDevelopableShare = 0.95;
   static constexpr double kCurvedScale = 1e-6;
 
  private:
