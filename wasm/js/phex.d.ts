@@ -172,11 +172,7 @@ export interface SolveReport {
    * (the guard had refused steps through such shapes on the way to planar ones).
    */
   foldsAllowed?: boolean;
-  /**
-   * The solver the result comes from: the one asked for, or 'volumes' (§6's Gauss-Newton, the reference
-   * method) where the local solver stalled a little short of `tolerance` (under 1e-3) on a mesh of at most 1200
-   * faces and the reference method reached it.
-   */
+  /** The solver the result comes from (the one asked for). */
   method?: 'local' | 'planes' | 'volumes';
   /** Largest node distance to the surface over its bounding-box diagonal, before and after that shift. */
   surfaceDistanceBefore: number;
