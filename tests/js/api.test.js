@@ -249,6 +249,31 @@ test("method 'auto' picks the field too and says which it used", async () => {
   assert.equal(torus.field, ''); // the torus is laid as a lattice
 });
 
+test('an uploaded barrel vault (a developable) is laid along its rulings, planar as laid', async () => {
+  // Half a cylinder of radius 2 and length 5, jitter-free: the curvature fits keep a trace of the vanishing
+  // curvature, which phex takes as 0 (a note says so); each ruling's hexagons share its tangent plane.
+  const nu = 50, nv = 40;
+  const lines = [];
+  for (let j = 0; j <= nv; j++) {
+    for (let i = 0; i <= nu; i++) {
+      const t = (Math.PI * j) / nv;
+      lines.push(`v ${(5 * i) / nu} ${2 * Math.cos(t)} ${2 * Math.sin(t)}`);
+    }
+  }
+  for (let j = 0; j < nv; j++) {
+    for (let i = 0; i < nu; i++) {
+      const a = j * (nu + 1) + i + 1;
+      lines.push(`f ${a} ${a + 1} ${a + nu + 2}`, `f ${a} ${a + nu + 2} ${a + nu + 1}`);
+    }
+  }
+  const mesh = new TextEncoder().encode(lines.join('\n'));
+  const r = await phex.run({ mesh, meshFormat: 'obj', faces: 1500 });
+  assert.ok(r.triangulation.notes.some((note) => /developable/.test(note)), r.triangulation.notes.join('\n'));
+  assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-12, String(r.metrics.planarityMax));
+  assert.ok(r.metrics.interiorHexagonFraction >= 0.99, String(r.metrics.interiorHexagonFraction));
+  assert.equal(r.metrics.selfIntersectingCount, 0);
+});
+
 test("an uploaded dome is laid along plane sections under 'auto', and section:DEG is a field of its own", async () => {
   // A paraboloid of revolution: its top is an umbilic, around which its curvature lines turn.
   const n = 60;
