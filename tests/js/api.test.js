@@ -249,24 +249,23 @@ test("method 'auto' picks the field too and says which it used", async () => {
   assert.equal(torus.field, ''); // the torus is laid as a lattice
 });
 
-test('an uploaded barrel vault (a developable) is laid along its rulings, planar as laid', async () => {
-  // Half a cylinder of radius 2 and length 5, jitter-free: the curvature fits keep a trace of the vanishing
-  // curvature, which phex takes as 0 (a note says so); each ruling's hexagons share its tangent plane.
-  const nu = 50, nv = 40;
+// An nu x nv grid of points point(u, v), u and v in [0, 1], each square cut along one diagonal, as OBJ bytes.
+function gridOBJ(nu, nv, point) {
   const lines = [];
-  for (let j = 0; j <= nv; j++) {
-    for (let i = 0; i <= nu; i++) {
-      const t = (Math.PI * j) / nv;
-      lines.push(`v ${(5 * i) / nu} ${2 * Math.cos(t)} ${2 * Math.sin(t)}`);
-    }
-  }
+  for (let j = 0; j <= nv; j++) for (let i = 0; i <= nu; i++) lines.push(`v ${point(i / nu, j / nv).join(' ')}`);
   for (let j = 0; j < nv; j++) {
     for (let i = 0; i < nu; i++) {
       const a = j * (nu + 1) + i + 1;
       lines.push(`f ${a} ${a + 1} ${a + nu + 2}`, `f ${a} ${a + nu + 2} ${a + nu + 1}`);
     }
   }
-  const mesh = new TextEncoder().encode(lines.join('\n'));
+  return new TextEncoder().encode(lines.join('\n'));
+}
+
+test('an uploaded barrel vault (a developable) is laid along its rulings, planar as laid', async () => {
+  // Half a cylinder of radius 2 and length 5, jitter-free: the curvature fits keep a trace of the vanishing
+  // curvature, which phex takes as 0 (a note says so); each ruling's hexagons share its tangent plane.
+  const mesh = gridOBJ(50, 40, (u, v) => [5 * u, 2 * Math.cos(Math.PI * v), 2 * Math.sin(Math.PI * v)]);
   const r = await phex.run({ mesh, meshFormat: 'obj', faces: 1500 });
   assert.ok(r.triangulation.notes.some((note) => /developable/.test(note)), r.triangulation.notes.join('\n'));
   assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-12, String(r.metrics.planarityMax));
@@ -276,21 +275,10 @@ test('an uploaded barrel vault (a developable) is laid along its rulings, planar
 
 test("an uploaded dome is laid along plane sections under 'auto', and section:DEG is a field of its own", async () => {
   // A paraboloid of revolution: its top is an umbilic, around which its curvature lines turn.
-  const n = 60;
-  const lines = [];
-  for (let j = 0; j <= n; j++) {
-    for (let i = 0; i <= n; i++) {
-      const x = -1 + (2 * i) / n, y = -1 + (2 * j) / n;
-      lines.push(`v ${x} ${y} ${0.5 * (1 - 0.35 * (x * x + y * y))}`);
-    }
-  }
-  for (let j = 0; j < n; j++) {
-    for (let i = 0; i < n; i++) {
-      const a = j * (n + 1) + i + 1;
-      lines.push(`f ${a} ${a + 1} ${a + n + 2}`, `f ${a} ${a + n + 2} ${a + n + 1}`);
-    }
-  }
-  const mesh = new TextEncoder().encode(lines.join('\n'));
+  const mesh = gridOBJ(60, 60, (u, v) => {
+    const x = -1 + 2 * u, y = -1 + 2 * v;
+    return [x, y, 0.5 * (1 - 0.35 * (x * x + y * y))];
+  });
   const auto = await phex.run({ mesh, meshFormat: 'obj', faces: 1200 });
   assert.equal(auto.field, 'section');
   assert.equal(auto.triangulation.check.invalidStars.length, 0);
