@@ -361,21 +361,15 @@ void keepWithinBoundary(const TriMesh& T, const VertexRings& rings, const std::v
 constexpr double kRulingCosine = 0.985;  // about 10 degrees
 int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo) {
   const int nv = static_cast<int>(geo.size());
-  int curved = 0, parabolic = 0;
   const double h = T.meanEdgeLength();
+  const double curvedAbove = 1e-9 / h;  // below it, a planar point
+  if (!samplesDevelopable(geo, curvedAbove)) return 0;
   auto zeroDirection = [](const LocalGeometry& g) { return std::abs(g.k1) < std::abs(g.k2) ? g.d1 : g.d2; };
-  for (const LocalGeometry& g : geo) {
-    const double kmax = std::max(std::abs(g.k1), std::abs(g.k2)), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
-    if (!(kmax * h > 1e-9)) continue;  // a planar point
-    ++curved;
-    parabolic += kmin <= kDevelopableRatio * kmax;
-  }
-  if (nv == 0 || curved < nv / 2 || parabolic < kDevelopableShare * curved) return 0;
   // The ruling direction at each vertex: its zero-curvature direction; at a planar point (on an inflection
   // ruling of a corrugated profile, both curvatures vanish and the principal directions are arbitrary) that
   // of its curved neighbours, which share the ruling's direction on a developable; none where it has none.
   std::vector<Vec3> ruling(nv, Vec3::Zero());
-  auto isCurved = [&](const LocalGeometry& g) { return std::max(std::abs(g.k1), std::abs(g.k2)) * h > 1e-9; };
+  auto isCurved = [&](const LocalGeometry& g) { return std::max(std::abs(g.k1), std::abs(g.k2)) > curvedAbove; };
   for (int v = 0; v < nv; ++v)
     if (isCurved(geo[v])) ruling[v] = zeroDirection(geo[v]);
   std::vector<Vec3> borrowed(nv, Vec3::Zero());

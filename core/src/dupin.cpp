@@ -64,4 +64,15 @@ std::optional<Vec3> dupinCenter(const LocalGeometry& g, const Vec3& a, const Vec
   return fromTangentPlane(g, *m);
 }
 
+bool samplesDevelopable(const std::vector<LocalGeometry>& samples, double curvedAbove) {
+  std::size_t curved = 0, parabolic = 0;
+  for (const LocalGeometry& g : samples) {
+    const double kmax = std::max(std::abs(g.k1), std::abs(g.k2)), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
+    if (!(kmax > curvedAbove)) continue;
+    ++curved;
+    parabolic += kmin <= kDevelopableRatio * kmax;
+  }
+  return curved > 0 && 2 * curved >= samples.size() && parabolic >= kDevelopableShare * double(curved);
+}
+
 }  // namespace phex

@@ -393,15 +393,7 @@ MeshSurface::MeshSurface(TriMesh mesh, std::string name) : mesh_(std::move(mesh)
   // stars judged by Props 4/5 where they cannot be, tangent planes that differ along a ruling. Where nearly
   // every curved vertex has one principal curvature under kDevelopableRatio of the other, that one is taken
   // as 0 there (vertices and points within triangles alike), as on the analytic developables (§5.3).
-  const double diagonal = bounds_.diagonal().norm();
-  int curved = 0, flat = 0;
-  for (const LocalGeometry& g : vertexGeometry_) {
-    const double kmax = std::max(std::abs(g.k1), std::abs(g.k2)), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
-    if (!(kmax * diagonal > kCurvedScale)) continue;
-    ++curved;
-    flat += kmin <= kDevelopableRatio * kmax;
-  }
-  developable_ = curved >= 0.5 * nv && flat >= kDevelopableShare * curved;
+  developable_ = samplesDevelopable(vertexGeometry_, kCurvedScale / bounds_.diagonal().norm());
   if (developable_)
     for (LocalGeometry& g : vertexGeometry_) snapDevelopable(g);
   buildTree();

@@ -487,15 +487,7 @@ namespace {
 // the other at kDevelopableShare of 400 samples where it is curved.
 bool isDevelopable(const Surface& surface) {
   if (const auto* mesh = dynamic_cast<const MeshSurface*>(&surface)) return mesh->developable();
-  const double diagonal = surface.bounds().diagonal().norm();
-  int curved = 0, flat = 0;
-  for (const LocalGeometry& g : surface.samples(400)) {
-    const double kmax = std::max(std::abs(g.k1), std::abs(g.k2)), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
-    if (!(kmax * diagonal > MeshSurface::kCurvedScale)) continue;
-    ++curved;
-    flat += kmin <= kDevelopableRatio * kmax;
-  }
-  return curved >= 200 && flat >= kDevelopableShare * curved;
+  return samplesDevelopable(surface.samples(400), MeshSurface::kCurvedScale / surface.bounds().diagonal().norm());
 }
 
 // What a noisy uploaded mesh (MeshSurface::noise) does to the method, said in the notes and in the errors of

@@ -898,17 +898,22 @@ int settleFreeNodes(PolyMesh& mesh, const Surface& surface, const CancelFlag* ca
     }
     const Vec3 start = mesh.vertex(v);
     const double before = (surface.closestPoint(start).point - start).norm();
-    // Valid only if no triangle at v turns over (or collapses) and no face at v starts crossing itself.
+    // Valid only if no triangle at v turns over (or collapses) and no face at v starts crossing itself: the
+    // faces as they are at the start, taken once a move is worth checking.
     std::vector<std::pair<int, Vec3>> triangles;
     std::vector<int> simple;
-    for (int k = at.start[v]; k < at.start[v + 1]; ++k) {
-      const int f = at.faces[k];
-      if (mesh.faceSize(f) == 3) triangles.emplace_back(f, triangleNormal(f));
-      else if (!faceSelfIntersects(mesh, f, planeNormal(f))) simple.push_back(f);
-    }
+    bool taken = false;
     // Moves v to x where that halves its distance and keeps its faces valid; else leaves it at the start.
     auto moveTo = [&](const Vec3& x) {
       if (!x.allFinite() || !((surface.closestPoint(x).point - x).norm() < 0.5 * before)) return false;
+      if (!taken) {
+        taken = true;
+        for (int k = at.start[v]; k < at.start[v + 1]; ++k) {
+          const int f = at.faces[k];
+          if (mesh.faceSize(f) == 3) triangles.emplace_back(f, triangleNormal(f));
+          else if (!faceSelfIntersects(mesh, f, planeNormal(f))) simple.push_back(f);
+        }
+      }
       mesh.V.row(v) = x.transpose();
       bool ok = true;
       for (const auto& [f, n0] : triangles) ok = ok && triangleNormal(f).dot(n0) > 0.25 * n0.squaredNorm();

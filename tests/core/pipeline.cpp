@@ -20,6 +20,13 @@ MeshInput sampledUpload(const std::string& surface, int faces, const SurfacePara
   return MeshInput{std::vector<std::uint8_t>(obj.begin(), obj.end()), "obj", surface + ".obj"};
 }
 
+// A triangulation's notes, one a line (for INFO and find).
+std::string allNotes(const Triangulation& triangulation) {
+  std::string notes;
+  for (const std::string& note : triangulation.notes) notes += note + "\n";
+  return notes;
+}
+
 // A developable's P-Hex mesh as §3 has it: quad-shaped hexagons planar as laid (no solver iteration), none
 // crossing itself, near the surface.
 void checkPlanarAsLaid(const PipelineResult& r) {
@@ -562,8 +569,7 @@ TEST_CASE("pipeline: rows ending on an uploaded mesh's boundary keep its P-Hex v
   p.mesh = sampledUpload("wave-roof", 60000);
   p.faces = 10000;
   const PipelineResult r = runPipeline(p);
-  std::string notes;
-  for (const std::string& n : r.triangulation.notes) notes += n + "\n";
+  const std::string notes = allNotes(r.triangulation);
   INFO(notes << "coverage " << r.check.coverage << ", distance " << r.metrics.surfaceDistanceMax << ", edges "
              << r.check.edgeMin / r.check.edgeMean << " of the mean, interior faces cut " << r.interiorFacesSplit);
   CHECK(r.solve.converged);
@@ -646,8 +652,7 @@ TEST_CASE("pipeline: a hill laid from its top grows its rows from a ring, not a 
   p.mesh = heightFieldUpload("hill", 80, [](double x, double y) { return 0.6 * std::exp(-1.2 * (x * x + y * y)); });
   p.faces = 5000;
   const TriangulationStage t = triangulate(p);
-  std::string notes;
-  for (const std::string& n : t.triangulation.notes) notes += n + "\n";
+  const std::string notes = allNotes(t.triangulation);
   INFO(notes);
   CHECK(notes.find("L0 moved") != std::string::npos);
   CHECK(t.check.coverage > 0.9);
@@ -698,8 +703,7 @@ TEST_CASE("pipeline: a noisy upload is laid from curvature fitted over wider rin
   });
   p.faces = 1500;
   const PipelineResult r = runPipeline(p);
-  std::string notes;
-  for (const std::string& note : r.triangulation.notes) notes += note + "\n";
+  const std::string notes = allNotes(r.triangulation);
   INFO(notes);
   CHECK(notes.find("the uploaded mesh is noisy") != std::string::npos);
   CHECK(r.solve.converged);
@@ -753,8 +757,7 @@ TEST_CASE("pipeline: an uploaded cylinder or cone is a developable too, planar a
     p.mesh = sampledUpload(surface, 15000);
     p.faces = 2500;
     const PipelineResult r = runPipeline(p);
-    std::string notes;
-    for (const std::string& note : r.triangulation.notes) notes += note + "\n";
+    const std::string notes = allNotes(r.triangulation);
     INFO(surface << "\n" << notes);
     CHECK(notes.find("the uploaded mesh is a developable") != std::string::npos);
     checkPlanarAsLaid(r);

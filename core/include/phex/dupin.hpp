@@ -6,6 +6,7 @@
 #pragma once
 #include <array>
 #include <optional>
+#include <vector>
 
 #include "phex/geometry.hpp"
 
@@ -40,6 +41,9 @@ PointType classify(const LocalGeometry& g, double tolerance, double lengthScale)
 // shared ruling planes and by the hand-over of Method 1 to Method 2 on developables.
 constexpr double kDevelopableRatio = 0.01;
 constexpr double kDevelopableShare = 0.95;
+// Whether `samples` are those of a developable: curved (max |k| over `curvedAbove`) at half of them or more,
+// and one principal curvature under kDevelopableRatio of the other at kDevelopableShare of those.
+bool samplesDevelopable(const std::vector<LocalGeometry>& samples, double curvedAbove);
 
 // The direction conjugate to the tangent direction t (2D, any length): the unit t' with II(t, t') = 0, i.e.
 // k1 t.x t'.x + k2 t.y t'.y = 0, oriented counterclockwise from t (t x t' >= 0 seen from the normal).
