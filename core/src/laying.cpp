@@ -98,7 +98,10 @@ constexpr double kBoundaryCrossing = 0.8;
 constexpr double kChordOffBoundary = 0.01;
 constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
 constexpr double kEllFirst = 1.5;     // ... at first only this many: further where no crossing is found
-constexpr int kParabolicSamples = 400;  // samples of the surface that vote for the base family at parabolic curves
+constexpr int kParabolicSamples = 400;
+// A developable's point whose largest curvature is under this share of the median over the samples is taken
+// as planar (an inflection of the profile) when L0 would start there (layTriangulation).
+constexpr double kPlanarStart = 0.2;  // samples of the surface that vote for the base family at parabolic curves
 // Method 1 smooths its apex offsets once per layer at about this many faces, more often at finer cells (see
 // progressiveApexes). Measured over ten surfaces at 1k-30k faces: 2500 left the cyclide 106 / 261 invalid
 // stars at 10k / 30k faces, 800 gives 53 / 119 (300 no better: 62 / 109), and at 1000 faces one pass as before.
@@ -2217,7 +2220,33 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
 
   const SurfaceWalker walker(surface, options.cell);
   const DirectionField field(walker, parseFieldSpec(options.field));
-  const SurfacePoint start = walker.project(options.start.value_or(surface.bounds().center()));
+  SurfacePoint start = walker.project(options.start.value_or(surface.bounds().center()));
+  // On a developable whose profile has inflections (a corrugated vault) the middle may fall on an inflection
+  // ruling, made of planar points: there the principal directions are arbitrary, and L0 ran across the
+  // rulings (a sampled wavy cylinder at 10000 faces: no solve converged). L0 starts on the nearest ruling
+  // that is clearly curved instead, where its direction is the ruling's.
+  const std::vector<LocalGeometry> samples = surface.samples(kParabolicSamples);
+  const bool developable = samplesDevelopable(samples, MeshSurface::kCurvedScale / surface.bounds().diagonal().norm());
+  std::string startNote;
+  if (developable) {
+    std::vector<double> kmax;
+    for (const LocalGeometry& s : samples) kmax.push_back(std::max(std::abs(s.k1), std::abs(s.k2)));
+    std::nth_element(kmax.begin(), kmax.begin() + kmax.size() / 2, kmax.end());
+    const double curved = kPlanarStart * kmax[kmax.size() / 2];
+    auto kmaxOf = [](const LocalGeometry& s) { return std::max(std::abs(s.k1), std::abs(s.k2)); };
+    if (kmaxOf(start.g) < curved) {
+      const LocalGeometry* nearest = nullptr;
+      for (const LocalGeometry& s : samples)
+        if (kmaxOf(s) >= curved && (!nearest || (s.point - start.point()).norm() < (nearest->point - start.point()).norm()))
+          nearest = &s;
+      if (nearest) {
+        startNote = "L0 starts at " + describe(walker, walker.project(nearest->point)) + ", the nearest clearly curved "
+                    "point: the start " + describe(walker, start) + " is a planar point of the developable (an "
+                    "inflection of its profile), where the ruling direction is undetermined";
+        start = walker.project(nearest->point);
+      }
+    }
+  }
   const LocalGeometry& g = start.g;
 
   // The family of the base curves and its direction at the start.
@@ -2243,7 +2272,11 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
   } else if (options.base == BaseFamily::Auto) {
     // A tie (as everywhere on a sphere) goes to the conjugate family whatever the round-off, so that native
     // and wasm builds lay alike.
-    const std::optional<Family> alongZero = familyAlongZeroCurvature(walker, field);
+    // On a developable the rows follow the rulings, the start's zero-curvature direction (below). The
+    // vote by label would not do where the profile has inflections: there k1 and k2 swap (the curved
+    // direction's curvature changes sign), and so do the labels of the ruling.
+    const std::optional<Family> alongZero =
+        developable ? std::nullopt : familyAlongZeroCurvature(walker, field);
     family = alongZero ? *alongZero
                             : normalCurvature(*dF) < (1 - 1e-9) * normalCurvature(*dG) ? Family::First
                                                                                        : Family::Conjugate;
@@ -2254,6 +2287,7 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
 
   Laying laying(walker, field, options, family, progress, cancel);
   Triangulation t = laying.run(start, initial);
+  if (!startNote.empty()) t.notes.insert(t.notes.begin(), startNote);
   try {
     vertexRings(t.mesh);
   } catch (const Error& e) {

@@ -394,8 +394,19 @@ MeshSurface::MeshSurface(TriMesh mesh, std::string name) : mesh_(std::move(mesh)
   // every curved vertex has one principal curvature under kDevelopableRatio of the other, that one is taken
   // as 0 there (vertices and points within triangles alike), as on the analytic developables (§5.3).
   developable_ = samplesDevelopable(vertexGeometry_, kCurvedScale / bounds_.diagonal().norm());
-  if (developable_)
+  if (developable_) {
+    // Points within triangles about an inflection ruling interpolate tensors of opposite signs, whose
+    // directions differ by a trace: a saddle with kmin = kmax and the ruling as an asymptotic direction (L0
+    // on a corrugated field failed there, at 500 and 800 faces). Where both curvatures are that small the
+    // point is taken as parabolic too.
+    std::vector<double> kmax;
+    for (const LocalGeometry& g : vertexGeometry_) kmax.push_back(std::max(std::abs(g.k1), std::abs(g.k2)));
+    std::nth_element(kmax.begin(), kmax.begin() + kmax.size() / 2, kmax.end());
+    planarBelow_ = kPlanarShare * kmax[kmax.size() / 2];
     for (LocalGeometry& g : vertexGeometry_) snapDevelopable(g);
+    findRulings();
+    for (int v = 0; v < nv; ++v) alongRuling(vertexGeometry_[v], rulings_[v]);
+  }
   buildTree();
   buildGrid();
 }
@@ -545,13 +556,73 @@ LocalGeometry MeshSurface::geometryInTriangle(int f, const Vec3& barycentric) co
     normal = (b - a).cross(c - a);
   }
   LocalGeometry g = principalFrame(point, normalized(normal), tensor);
-  if (developable_) snapDevelopable(g);
+  if (developable_) {
+    snapDevelopable(g);
+    if (std::max(std::abs(g.k1), std::abs(g.k2)) < planarBelow_) {
+      const Vec3& first = rulings_[mesh_.F(f, 0)];
+      Vec3 ruling = Vec3::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const Vec3& r = rulings_[mesh_.F(f, k)];
+        ruling += barycentric(k) * (r.dot(first) < 0 ? Vec3(-r) : r);
+      }
+      alongRuling(g, ruling);
+    }
+  }
   return g;
 }
 
+// A developable's ruling direction at each vertex: its zero-curvature direction where it is clearly curved.
+// About an inflection of the profile (planar points) the fitted principal directions are arbitrary, and
+// within triangles there the interpolated tensors of opposite signs turn them anywhere (a corrugated field's
+// rows, laid across such a band, lost their apexes over half a row at 800 faces): there the vertices take
+// the rulings of their curved neighbours, ring by ring.
+void MeshSurface::findRulings() {
+  const int nv = vertexCount();
+  rulings_.assign(nv, Vec3::Zero());
+  std::vector<char> known(nv, 0);
+  for (int v = 0; v < nv; ++v) {
+    const LocalGeometry& g = vertexGeometry_[v];
+    // Boundary vertices' one-sided fits are the least sure of their directions (a corrugated field's last
+    // column had its "ruling" along the boundary): they borrow too, as do the few whose fit was not parabolic.
+    if (std::max(std::abs(g.k1), std::abs(g.k2)) < planarBelow_ || onBoundary_[v] || (g.k1 != 0 && g.k2 != 0))
+      continue;
+    rulings_[v] = g.k2 == 0 ? g.d2 : g.d1;
+    known[v] = 1;
+  }
+  std::vector<std::pair<int, Vec3>> wave;
+  for (int ring = 0; ring < nv; ++ring) {
+    wave.clear();
+    for (int v = 0; v < nv; ++v) {
+      if (known[v]) continue;
+      Vec3 sum = Vec3::Zero();
+      for (int j = neighbourStart_[v]; j < neighbourStart_[v + 1]; ++j) {
+        const int w = neighbours_[j];
+        if (known[w]) sum += sum.dot(rulings_[w]) < 0 ? Vec3(-rulings_[w]) : rulings_[w];
+      }
+      const Vec3& n = vertexGeometry_[v].normal;
+      sum -= sum.dot(n) * n;
+      if (norm(sum) > 0) wave.emplace_back(v, normalized(sum));
+    }
+    if (wave.empty()) break;
+    for (const auto& [v, r] : wave) rulings_[v] = r, known[v] = 1;
+  }
+}
+
+// Principal directions along `ruling` (and across it) at a developable's planar point: the ruling takes the
+// zero curvature.
+void MeshSurface::alongRuling(LocalGeometry& g, const Vec3& ruling) const {
+  if (!(std::max(std::abs(g.k1), std::abs(g.k2)) < planarBelow_)) return;
+  Vec3 r = ruling - ruling.dot(g.normal) * g.normal;
+  if (!(norm(r) > 1e-9)) return;
+  r = normalized(r);
+  if (g.k2 == 0) g.d1 = r.cross(g.normal), g.d2 = r;  // d2 = normal x d1 = r
+  else g.d1 = r, g.d2 = g.normal.cross(r);
+}
+
 void MeshSurface::snapDevelopable(LocalGeometry& g) const {
-  if (std::abs(g.k2) <= kDevelopableRatio * std::abs(g.k1)) g.k2 = 0;
-  else if (std::abs(g.k1) <= kDevelopableRatio * std::abs(g.k2)) g.k1 = 0;
+  const double ratio = std::max(std::abs(g.k1), std::abs(g.k2)) < planarBelow_ ? 1.0 : kDevelopableRatio;
+  if (std::abs(g.k2) <= ratio * std::abs(g.k1)) g.k2 = 0;
+  else if (std::abs(g.k1) <= ratio * std::abs(g.k2)) g.k1 = 0;
 }
 
 void MeshSurface::buildTree() {

@@ -34,6 +34,24 @@ class WavySheet : public ParametricSurface {
   double A = 0.5, w = 1.5;
 };
 
+// z = A sin(w y) over [-2, 2]^2: a corrugated vault, a developable with rulings along x and inflection
+// rulings (planar points) at y = 0 and y = +-pi / w.
+class CorrugatedVault : public ParametricSurface {
+ public:
+  std::string name() const override { return "corrugated-vault"; }
+  Domain domain() const override { return {-2, 2, -2, 2, false, false}; }
+  Jet jet(double x, double y) const override {
+    Jet j;
+    j.P = Vec3(x, y, A * std::sin(w * y));
+    j.Pu = Vec3(1, 0, 0);
+    j.Pv = Vec3(0, 1, A * w * std::cos(w * y));
+    j.Puu = j.Puv = Vec3::Zero();
+    j.Pvv = Vec3(0, 0, -A * w * w * std::sin(w * y));
+    return j;
+  }
+  double A = 0.4, w = 1.2;
+};
+
 // Deterministic noise in [-1, 1) (the same on every platform, unlike <random>'s distributions).
 double noise(std::uint32_t i, std::uint32_t salt) {
   std::uint32_t h = i * 2654435761u ^ (salt + 0x9e3779b9u);
@@ -438,4 +456,38 @@ TEST_CASE("mesh_surface: a developable is recognized and its vanishing curvature
     INFO(name);
     CHECK_FALSE(m.developable());
   }
+}
+
+TEST_CASE("mesh_surface: a developable's planar points take the direction of the rulings around them") {
+  // About the inflection ruling y = 0 both fitted curvatures vanish and the principal directions are
+  // arbitrary; within triangles there, tensors of opposite signs interpolated made saddles with the ruling
+  // as an asymptotic direction. Each point there is parabolic with its zero-curvature direction along the
+  // rulings (x), as everywhere else.
+  // A regular grid (no jitter), so that a row of vertices lies on the inflection ruling itself, as on a
+  // sampled height field: their fits give curvatures of 1e-16 and any direction.
+  const CorrugatedVault vault;
+  const Sampled s = sample(vault, 160, 160, 0.0);
+  const MeshSurface m(s.mesh, "corrugated-vault");
+  REQUIRE(m.developable());
+  int onInflection = 0;
+  for (const LocalGeometry& g : m.vertexGeometries()) {
+    if (std::abs(g.point.y()) > 1e-9) continue;
+    INFO("vertex at x = " << g.point.x() << ": k1 " << g.k1 << ", k2 " << g.k2 << ", d1 " << g.d1.transpose());
+    REQUIRE((g.k1 == 0 || g.k2 == 0));
+    CHECK(std::abs((g.k1 == 0 ? g.d1 : g.d2).x()) > std::cos(3 * kPi / 180));
+    ++onInflection;
+  }
+  CHECK(onInflection == 161);
+  int checked = 0;
+  for (int i = 0; i <= 40; ++i)
+    for (const double y : {-0.06, -0.025, -0.01, 0.0, 0.013, 0.03, 0.055}) {
+      const double x = -2 + 4.0 * i / 40;  // up to the boundary, where the fits are one-sided
+      const LocalGeometry g = m.closestPoint(Vec3(x, y, vault.A * std::sin(vault.w * y) + 0.001));
+      INFO("at (" << x << ", " << y << "): k1 " << g.k1 << ", k2 " << g.k2 << ", d1 " << g.d1.transpose());
+      REQUIRE((g.k1 == 0 || g.k2 == 0));
+      const Vec3 zero = g.k1 == 0 ? g.d1 : g.d2;
+      CHECK(std::abs(zero.x()) > std::cos(3 * kPi / 180));
+      ++checked;
+    }
+  CHECK(checked == 41 * 7);
 }

@@ -64,8 +64,11 @@ class MeshSurface : public Surface {
   int curvatureRings() const { return curvatureRings_; }
   // Whether the mesh is a developable: one principal curvature under kDevelopableRatio of the other at
   // kDevelopableShare of the vertices where it is curved (over kCurvedScale / diagonal). That curvature is
-  // then 0 wherever it is under kDevelopableRatio of the other, as on an analytic developable.
+  // then 0 wherever it is under kDevelopableRatio of the other, as on an analytic developable, and also
+  // where both are small (under kPlanarShare of the vertices' median largest curvature: about an inflection
+  // of a corrugated profile, whose planar points the fits give no sharp ratio).
   bool developable() const { return developable_; }
+  static constexpr double kPlanarShare = 0.2;
   static constexpr double kCurvedScale = 1e-6;
 
  private:
@@ -91,7 +94,11 @@ class MeshSurface : public Surface {
   std::string name_;
   double noise_ = 0;
   bool developable_ = false;
+  double planarBelow_ = 0;  // a developable's largest curvature under which a point counts as planar
+  std::vector<Vec3> rulings_;  // a developable's ruling direction at each vertex (planar ones: borrowed)
   void snapDevelopable(LocalGeometry& g) const;
+  void findRulings();
+  void alongRuling(LocalGeometry& g, const Vec3& ruling) const;
   int curvatureRings_ = 2;
   Box3 bounds_;
   std::vector<int> neighbourStart_, neighbours_;  // vertex adjacency in compressed rows
