@@ -388,8 +388,15 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
   // of those decides. Each at the cell its trial predicts for the face count asked (as the full lay is, see
   // `triangulate`), and the winner's lay is kept as the full lay: one lay fewer (on the bumps at 10k faces,
   // before kClearTrial let the trials decide there, about 0.45 s).
+  // Method 2's rows only where the curved part has an umbilic, around which a singularity-free network may
+  // not exist (the bumps): elsewhere its rows along the zero-curvature direction are §5.3's, and the other
+  // family crosses the parabolic curves the infeasible way (Fig. 19). On the whole cyclide at 1000 faces (no
+  // umbilic) its trial happened to score higher, and the full lay, across both parabolic circles, stopped at
+  // 6e-3 (exit 2). Method 1's rows find their own conjugates, and on the wave roof its lays from the other
+  // family's start are better (96-98 % hexagons at 1000-5000 faces, 90-95 % without).
   bool otherFamily = false;
-  if (poor && best.start && (choice.base == BaseFamily::First || choice.base == BaseFamily::Conjugate)) {
+  if (poor && best.start && (choice.base == BaseFamily::First || choice.base == BaseFamily::Conjugate) &&
+      (options.method != LayingMethod::Prespecified || umbilicWithinCurvedPart(surface))) {
     const BaseFamily rule = choice.base, other = rule == BaseFamily::First ? BaseFamily::Conjugate : BaseFamily::First;
     trial.base = other;
     const Best alternative = bestStart();

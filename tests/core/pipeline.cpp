@@ -661,6 +661,23 @@ TEST_CASE("pipeline: a hill laid from its top grows its rows from a ring, not a 
   CHECK(t.triangulation.mesh.V.rows() < 6000);
 }
 
+TEST_CASE("pipeline: Method 2 keeps its rows along the zero-curvature direction on a surface without umbilics") {
+  // The whole cyclide at 1000 faces: the trial lays of the family along the parabolic circles scored poorly,
+  // and the other family's trial, across both circles (Fig. 19's infeasible way), scored higher; its full lay
+  // stopped at 6e-3 (exit 2). The other family is for surfaces with an umbilic in their curved part (bumps).
+  PipelineParams p;
+  p.surface = "cyclide";
+  p.method = TriangulationMethod::Prespecified;
+  p.faces = 1000;
+  const PipelineResult r = runPipeline(p);
+  const std::string notes = allNotes(r.triangulation);
+  INFO(notes);
+  CHECK(notes.find("across the zero-curvature direction") == std::string::npos);
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+}
+
 TEST_CASE("pipeline: a start choice does not take overlapping triangles for coverage") {
   // Half a cyclide ring, closed around its tube, by Method 1: one family's trial laid triangles over each
   // other (coverage 1.39 at 2500 faces), scored higher than a lay that covers less without overlap, and won;
