@@ -9,6 +9,7 @@
 
 #include "phex/dupin.hpp"
 #include "phex/error.hpp"
+#include "phex/mesh_surface.hpp"
 
 namespace phex {
 namespace {
@@ -196,6 +197,8 @@ DirectionField::DirectionField(const SurfaceWalker& walker, const FieldSpec& spe
   axis_ = Vec3(std::sin(tilt), 0, std::cos(tilt));
   centre_ = walker.surface().bounds().center();
   if (spec.kind == FieldKind::Section) sectionNormal_ = sectionPlaneNormal(walker.surface(), spec.degrees);
+  const auto* mesh = dynamic_cast<const MeshSurface*>(&walker.surface());
+  rulings_ = mesh && mesh->developable();
 }
 
 std::optional<Vec3> DirectionField::meridian(const SurfacePoint& p) const {
@@ -206,6 +209,9 @@ std::optional<Vec3> DirectionField::meridian(const SurfacePoint& p) const {
 }
 
 bool DirectionField::isUmbilic(const LocalGeometry& g) const {
+  // A flat apron of a vault: the meridians about the bounds' centre laid its rows in arcs, the seams with the
+  // rows along the rulings left 115 faces off planar (a sampled vault on a flat apron at 1000 faces).
+  if (rulings_) return false;
   return phex::isUmbilic(g, walker_.cell(), walker_.parametric() ? kUmbilicAnalytic : kUmbilicMesh);
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "phex/dupin.hpp"
+#include "phex/mesh_surface.hpp"
 #include "phex/error.hpp"
 #include "phex/metrics.hpp"
 
@@ -359,7 +360,8 @@ void keepWithinBoundary(const TriMesh& T, const VertexRings& rings, const std::v
 // share a plane. On an uploaded cylinder and cone laid by Method 2 every face comes out planar to round-off
 // (0 solver iterations from 1000 to 10000 faces), where the local solver stalled at 1e-5 to 1e-3.
 constexpr double kRulingCosine = 0.985;  // about 10 degrees
-int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo) {
+constexpr int kMergePasses = 64;
+int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo, bool rulingsEverywhere) {
   const int nv = static_cast<int>(geo.size());
   const double h = T.meanEdgeLength();
   const double curvedAbove = 1e-9 / h;  // below it, a planar point
@@ -368,8 +370,13 @@ int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo) {
   // The ruling direction at each vertex: its zero-curvature direction; at a planar point (on an inflection
   // ruling of a corrugated profile, both curvatures vanish and the principal directions are arbitrary) that
   // of its curved neighbours, which share the ruling's direction on a developable; none where it has none.
+  // With `rulingsEverywhere` (an uploaded developable) planar points already carry the rulings around them
+  // (MeshSurface), so that a flat apron's rows group too: else each of its vertices kept a plane of its own,
+  // and the strips where they met the first tilted rows of the bend were left 5e-5 off planar.
   std::vector<Vec3> ruling(nv, Vec3::Zero());
-  auto isCurved = [&](const LocalGeometry& g) { return std::max(std::abs(g.k1), std::abs(g.k2)) > curvedAbove; };
+  auto isCurved = [&](const LocalGeometry& g) {
+    return rulingsEverywhere || std::max(std::abs(g.k1), std::abs(g.k2)) > curvedAbove;
+  };
   for (int v = 0; v < nv; ++v)
     if (isCurved(geo[v])) ruling[v] = zeroDirection(geo[v]);
   std::vector<Vec3> borrowed(nv, Vec3::Zero());
@@ -425,21 +432,27 @@ int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo) {
   // start off planar. Such neighbours share one plane (their faces are then not quite tangent, where the
   // surface is nearly flat). A corrugated height field stalled at 2e-7 to 9e-6 at 800, 1000, 1500 and 2000
   // faces; with the borrowed ruling directions above and this, 800, 1000 and 2000 are planar as laid.
-  bool merged = false;
-  for (Eigen::Index f = 0; f < T.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int a = T.F(f, k), b = T.F(f, (k + 1) % 3), ra = find(a), rb = find(b);
-      if (ra == rb) continue;
-      Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
-      N.row(0) = sumNormal[ra].normalized().transpose();
-      N.row(1) = sumNormal[rb].normalized().transpose();
-      const Vec3 d(N.row(0).dot(sumPoint[ra] / count[ra]), N.row(1).dot(sumPoint[rb] / count[rb]), 0.0);
-      const Vec3 c = (geo[T.F(f, 0)].point + geo[T.F(f, 1)].point + geo[T.F(f, 2)].point) / 3;
-      double longest = 0;
-      for (int i = 0; i < 3; ++i) longest = std::max(longest, (geo[T.F(f, i)].point - geo[T.F(f, (i + 1) % 3)].point).norm());
-      if ((nearestOnPlanes(N, d, c) - c).norm() > 0.75 * longest) parent[ra] = rb, merged = true;
-    }
-  if (merged) sumUp();
+  // Until no more merge: a merged group's plane is their mean, which may then meet a further neighbour's far
+  // off (a vault on a flat apron: the apron's rows, exactly flat, against the first rows of the bend, merged
+  // and tilted by 1e-4, left the strip between them 5e-5 off planar).
+  auto mergeFar = [&]() {
+    bool merged = false;
+    for (Eigen::Index f = 0; f < T.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int a = T.F(f, k), b = T.F(f, (k + 1) % 3), ra = find(a), rb = find(b);
+        if (ra == rb) continue;
+        Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+        N.row(0) = sumNormal[ra].normalized().transpose();
+        N.row(1) = sumNormal[rb].normalized().transpose();
+        const Vec3 d(N.row(0).dot(sumPoint[ra] / count[ra]), N.row(1).dot(sumPoint[rb] / count[rb]), 0.0);
+        const Vec3 c = (geo[T.F(f, 0)].point + geo[T.F(f, 1)].point + geo[T.F(f, 2)].point) / 3;
+        double longest = 0;
+        for (int i = 0; i < 3; ++i) longest = std::max(longest, (geo[T.F(f, i)].point - geo[T.F(f, (i + 1) % 3)].point).norm());
+        if ((nearestOnPlanes(N, d, c) - c).norm() > 0.75 * longest) parent[ra] = rb, merged = true;
+      }
+    return merged;
+  };
+  for (int pass = 0; pass < kMergePasses && mergeFar(); ++pass) sumUp();
   int shared = 0;
   for (int v = 0; v < nv; ++v) {
     const int r = find(v);
@@ -461,7 +474,8 @@ DualMesh dualWith(const Triangulation& tri, const Surface& surface, Place place,
   const TriMesh& T = tri.mesh;
   const int nf = static_cast<int>(T.F.rows());
   std::vector<LocalGeometry> geo = vertexGeometry(tri, surface);
-  const bool rulings = shareRulingPlanes(T, geo) > 0;
+  const auto* mesh = dynamic_cast<const MeshSurface*>(&surface);
+  const bool rulings = shareRulingPlanes(T, geo, mesh && mesh->developable()) > 0;
   const VertexRings rings = vertexRings(T);
   Points U(nf, 3);
   int fallbacks = 0;

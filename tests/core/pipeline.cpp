@@ -791,6 +791,25 @@ TEST_CASE("pipeline: a developable whose middle is an inflection ruling starts L
   }
 }
 
+TEST_CASE("pipeline: a vault on a flat apron, a developable with planar points, is planar as laid") {
+  // z = 0 for y < -0.3, then a circular bend of radius 1.5. The apron's points are planar: they used to be
+  // taken as umbilics, whose rows followed the meridians about the middle (in arcs, laid as a second system),
+  // and their vertices kept a plane each in the dual; 1000 and 3000 faces stopped at 8e-6 and 2e-4 (exit 2).
+  // Now they carry the rulings of the bend (along x), and the apron's rows share its plane.
+  PipelineParams p;
+  p.mesh = heightFieldUpload("vault-on-apron", 100, [](double, double y) {
+    return y < -0.3 ? 0.0 : 1.5 - std::sqrt(1.5 * 1.5 - (y + 0.3) * (y + 0.3));
+  });
+  for (const int faces : {1000, 3000}) {
+    p.faces = faces;
+    const PipelineResult r = runPipeline(p);
+    INFO(faces << " faces\n" << allNotes(r.triangulation));
+    CHECK(r.triangulation.systems == 1);
+    checkPlanarAsLaid(r);
+    CHECK(r.check.coverage > 0.95);
+  }
+}
+
 TEST_CASE("pipeline: an uploaded cylinder or cone is a developable too, planar as laid") {
   // Their estimated curvature keeps a trace of the vanishing one (1e-5 to 1e-3 of the other): taken as 0
   // (MeshSurface::developable). Before, every lay had layers at the lower bound (ideal steps of a few

@@ -98,7 +98,8 @@ class DirectionField {
 
   // Whether g is an umbilic (or planar point) for this field: k1 - k2 within round-off of kmax on an analytic
   // surface, within 2 % on an uploaded mesh, whose estimated curvatures are that noisy (a sampled sphere's
-  // principal directions are noise).
+  // principal directions are noise). Never on an uploaded developable (MeshSurface::developable): its planar
+  // points (a flat apron, an inflection ruling) carry the direction of the rulings around them.
   bool isUmbilic(const LocalGeometry& g) const;
 
   const FieldSpec& spec() const { return spec_; }
@@ -112,6 +113,7 @@ class DirectionField {
   FieldSpec spec_;
   Vec3 axis_, centre_;  // the meridian fields' axis
   Vec3 sectionNormal_ = Vec3::UnitY();  // "section": the normal of the cutting planes
+  bool rulings_ = false;  // an uploaded developable
 };
 
 // A traced flow line: points on the surface from the start, in the traced direction.
