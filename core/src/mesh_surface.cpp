@@ -589,11 +589,24 @@ void MeshSurface::findRulings() {
     rulings_[v] = g.k2 == 0 ? g.d2 : g.d1;
     known[v] = 1;
   }
-  std::vector<std::pair<int, Vec3>> wave;
-  for (int ring = 0; ring < nv; ++ring) {
-    wave.clear();
-    for (int v = 0; v < nv; ++v) {
-      if (known[v]) continue;
+  // Ring by ring from the known ones (a flat apron may be hundreds of rings wide): each ring's vertices take
+  // the mean of their known neighbours' rulings, all from the rings before.
+  std::vector<int> frontier, ring;
+  for (int v = 0; v < nv; ++v)
+    if (known[v]) frontier.push_back(v);
+  std::vector<char> queued(nv, 0);
+  std::vector<Vec3> found;
+  while (!frontier.empty()) {
+    ring.clear();
+    for (int w : frontier)
+      for (int j = neighbourStart_[w]; j < neighbourStart_[w + 1]; ++j) {
+        const int v = neighbours_[j];
+        if (!known[v] && !queued[v]) queued[v] = 1, ring.push_back(v);
+      }
+    std::sort(ring.begin(), ring.end());
+    found.assign(ring.size(), Vec3::Zero());
+    for (std::size_t i = 0; i < ring.size(); ++i) {
+      const int v = ring[i];
       Vec3 sum = Vec3::Zero();
       for (int j = neighbourStart_[v]; j < neighbourStart_[v + 1]; ++j) {
         const int w = neighbours_[j];
@@ -601,10 +614,14 @@ void MeshSurface::findRulings() {
       }
       const Vec3& n = vertexGeometry_[v].normal;
       sum -= sum.dot(n) * n;
-      if (norm(sum) > 0) wave.emplace_back(v, normalized(sum));
+      if (norm(sum) > 0) found[i] = normalized(sum);
     }
-    if (wave.empty()) break;
-    for (const auto& [v, r] : wave) rulings_[v] = r, known[v] = 1;
+    frontier.clear();
+    for (std::size_t i = 0; i < ring.size(); ++i) {
+      const int v = ring[i];
+      queued[v] = 0;  // one that found nothing is looked at again when a neighbour is found
+      if (norm(found[i]) > 0) rulings_[v] = found[i], known[v] = 1, frontier.push_back(v);
+    }
   }
 }
 
