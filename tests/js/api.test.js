@@ -273,6 +273,21 @@ test('an uploaded barrel vault (a developable) is laid along its rulings, planar
   assert.equal(r.metrics.selfIntersectingCount, 0);
 });
 
+test('an uploaded vault on a flat apron (a developable with planar points) is planar as laid', async () => {
+  // z = 0 for y < -0.3, then a bend of radius 1.5: the apron's points are planar; they carry the rulings of the
+  // bend, so the apron is laid in the same rows, in one system, and its hexagons share its plane.
+  const mesh = gridOBJ(100, 100, (u, v) => {
+    const x = -1 + 2 * u, y = -1 + 2 * v;
+    return [x, y, y < -0.3 ? 0 : 1.5 - Math.sqrt(1.5 * 1.5 - (y + 0.3) * (y + 0.3))];
+  });
+  const r = await phex.run({ mesh, meshFormat: 'obj', faces: 1000 });
+  assert.equal(r.triangulation.systems, 1);
+  assert.equal(r.solve.iterations, 0);
+  assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-12, String(r.metrics.planarityMax));
+  assert.ok(r.metrics.interiorHexagonFraction >= 0.99, String(r.metrics.interiorHexagonFraction));
+  assert.equal(r.metrics.selfIntersectingCount, 0);
+});
+
 test("an uploaded dome is laid along plane sections under 'auto', and section:DEG is a field of its own", async () => {
   // A paraboloid of revolution: its top is an umbilic, around which its curvature lines turn.
   const mesh = gridOBJ(60, 60, (u, v) => {
