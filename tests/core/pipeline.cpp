@@ -794,7 +794,7 @@ TEST_CASE("pipeline: a developable whose middle is an inflection ruling starts L
 TEST_CASE("pipeline: a vault on a flat apron, a developable with planar points, is planar as laid") {
   // z = 0 for y < -0.3, then a circular bend of radius 1.5. The apron's points are planar: they used to be
   // taken as umbilics, whose rows followed the meridians about the middle (in arcs, laid as a second system),
-  // and their vertices kept a plane each in the dual; 1000 and 3000 faces stopped at 8e-6 and 2e-4 (exit 2).
+  // and their vertices kept a plane each in the dual; 1000 and 3000 faces stopped at 8e-6 and 1.5e-4 (exit 2).
   // Now they carry the rulings of the bend (along x), and the apron's rows share its plane.
   PipelineParams p;
   p.mesh = heightFieldUpload("vault-on-apron", 100, [](double, double y) {
