@@ -42,7 +42,7 @@ std::optional<Vec3> tangentUnit(const LocalGeometry& g, const Vec3& v) {
 
 // Every direction is principal at an umbilic or planar point: the principal fields are undefined there.
 bool isUmbilic(const LocalGeometry& g, double cell, double tolerance) {
-  const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
+  const double kmax = g.largestCurvature();
   return g.k1 - g.k2 <= tolerance * kmax || kmax * cell <= 1e-9;
 }
 

@@ -375,7 +375,7 @@ int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo, bool ru
   // and the strips where they met the first tilted rows of the bend were left 5e-5 off planar.
   std::vector<Vec3> ruling(nv, Vec3::Zero());
   auto isCurved = [&](const LocalGeometry& g) {
-    return rulingsEverywhere || std::max(std::abs(g.k1), std::abs(g.k2)) > curvedAbove;
+    return rulingsEverywhere || g.largestCurvature() > curvedAbove;
   };
   for (int v = 0; v < nv; ++v)
     if (isCurved(geo[v])) ruling[v] = zeroDirection(geo[v]);

@@ -16,7 +16,7 @@ double secondFundamentalForm(const LocalGeometry& g, const Vec2& s, const Vec2& 
 }
 
 PointType classify(const LocalGeometry& g, double tolerance, double lengthScale) {
-  const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
+  const double kmax = g.largestCurvature();
   const double kmin = std::min(std::abs(g.k1), std::abs(g.k2));
   if (kmax * lengthScale <= tolerance) return PointType::Planar;
   if (kmin <= tolerance * kmax) return PointType::Parabolic;
@@ -26,7 +26,7 @@ PointType classify(const LocalGeometry& g, double tolerance, double lengthScale)
 std::optional<Vec2> conjugateDirection(const LocalGeometry& g, const Vec2& t) {
   // II(t, t') = (S t) . t' with S = diag(k1, k2): t' is S t turned by a quarter.
   const Vec2 St(g.k1 * t.x(), g.k2 * t.y());
-  const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
+  const double kmax = g.largestCurvature();
   if (!(St.norm() > 1e-14 * kmax * t.norm())) return std::nullopt;
   Vec2 c = Vec2(-St.y(), St.x()).normalized();
   // t x c = II(t, t) / |S t|: flip to keep c counterclockwise from t; an asymptotic t (to round-off) gets
@@ -67,12 +67,20 @@ std::optional<Vec3> dupinCenter(const LocalGeometry& g, const Vec3& a, const Vec
 bool samplesDevelopable(const std::vector<LocalGeometry>& samples, double curvedAbove) {
   std::size_t curved = 0, parabolic = 0;
   for (const LocalGeometry& g : samples) {
-    const double kmax = std::max(std::abs(g.k1), std::abs(g.k2)), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
+    const double kmax = g.largestCurvature(), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
     if (!(kmax > curvedAbove)) continue;
     ++curved;
     parabolic += kmin <= kDevelopableRatio * kmax;
   }
   return curved > 0 && 2 * curved >= samples.size() && parabolic >= kDevelopableShare * double(curved);
+}
+
+double planarBelow(const std::vector<LocalGeometry>& samples) {
+  std::vector<double> kmax;
+  kmax.reserve(samples.size());
+  for (const LocalGeometry& g : samples) kmax.push_back(g.largestCurvature());
+  std::nth_element(kmax.begin(), kmax.begin() + kmax.size() / 2, kmax.end());
+  return kPlanarShare * kmax[kmax.size() / 2];
 }
 
 }  // namespace phex

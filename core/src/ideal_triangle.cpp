@@ -18,7 +18,7 @@ IdealApex idealApex(const LocalGeometry& g, const Vec2& A, const Vec2& B, Side s
     return r;
   }
   const Vec2 h = 0.5 * (B - A);  // M -> B
-  const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
+  const double kmax = g.largestCurvature();
   const double hh = secondFundamentalForm(g, h, h);
   if (!(std::abs(hh) > tolerance * kmax * h.squaredNorm())) {
     r.status = IdealApex::Status::Asymptotic;
@@ -69,7 +69,7 @@ StarValidity starValidity(const LocalGeometry& g, const Triangle2& t) {
   if (K < 0) {
     // Prop. 5 (3): the asymptotic lines split the edge directions into II > 0 and II < 0; an edge on an
     // asymptote has no circumscribing Dupin hyperbola at all.
-    const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
+    const double kmax = g.largestCurvature();
     int positive = 0, negative = 0, k = 0;
     for (const Vec2& e : {e0, e1, e2}) {
       const double q = secondFundamentalForm(g, e, e);

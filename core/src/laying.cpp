@@ -98,10 +98,7 @@ constexpr double kBoundaryCrossing = 0.8;
 constexpr double kChordOffBoundary = 0.01;
 constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
 constexpr double kEllFirst = 1.5;     // ... at first only this many: further where no crossing is found
-constexpr int kParabolicSamples = 400;
-// A developable's point whose largest curvature is under this share of the median over the samples is taken
-// as planar (an inflection of the profile) when L0 would start there (layTriangulation).
-constexpr double kPlanarStart = 0.2;  // samples of the surface that vote for the base family at parabolic curves
+constexpr int kParabolicSamples = 400;  // samples of the surface that vote for the base family at parabolic curves
 // Method 1 smooths its apex offsets once per layer at about this many faces, more often at finer cells (see
 // progressiveApexes). Measured over ten surfaces at 1k-30k faces: 2500 left the cyclide 106 / 261 invalid
 // stars at 10k / 30k faces, 800 gives 53 / 119 (300 no better: 62 / 109), and at 1000 faces one pass as before.
@@ -608,7 +605,7 @@ Segment Laying::segment(const Row& row, int i) const {
   double r;
   // Near a parabolic curve both asymptotic directions merge into the zero-curvature one, and a base close to
   // them is §5.3's business, not a sign that the field is asymptotic.
-  const double kmax = std::max(std::abs(g.k1), std::abs(g.k2)), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
+  const double kmax = g.largestCurvature(), kmin = std::min(std::abs(g.k1), std::abs(g.k2));
   const bool sheared = ideal.status == IdealApex::Status::Asymptotic ||
                        (ideal.ok() && std::abs(cross2(along, ideal.direction)) < kMinConjugateSine);
   IdealApex::Status status = ideal.status;
@@ -1444,7 +1441,7 @@ void Laying::layLayer(std::size_t f, double stepScale) {
     int parabolic = 0;
     const double nearParabolic = spacing > o_.cell ? kResampleParabolic : kNearParabolic;
     for (const Apex& a : run) {
-      const double kmax = std::max(std::abs(a.p.g.k1), std::abs(a.p.g.k2));
+      const double kmax = a.p.g.largestCurvature();
       parabolic += kmax > 0 && std::min(std::abs(a.p.g.k1), std::abs(a.p.g.k2)) < nearParabolic * kmax;
     }
     const bool atParabolic = 5 * parabolic > length && spacing < kResampleLimit * o_.cell;
@@ -2152,10 +2149,12 @@ Triangulation Laying::run(const SurfacePoint& start, const Vec3& initial) {
 // bow-ties of the hyperbolic side. The family whose direction is nearer the zero-curvature one at the
 // surface's near-parabolic samples wins when the vote is clear (two thirds, from at least three samples).
 // nullopt on surfaces without parabolic points.
-std::optional<Family> familyAlongZeroCurvature(const SurfaceWalker& walker, const DirectionField& field) {
+// `samples`: the surface's kParabolicSamples samples.
+std::optional<Family> familyAlongZeroCurvature(const SurfaceWalker& walker, const DirectionField& field,
+                                               const std::vector<LocalGeometry>& samples) {
   int first = 0, conjugate = 0;
-  for (const LocalGeometry& g : walker.surface().samples(kParabolicSamples)) {
-    const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
+  for (const LocalGeometry& g : samples) {
+    const double kmax = g.largestCurvature();
     if (!(kmax > 0) || std::abs(g.k1 * g.k2) > kNearParabolic * kmax * kmax) continue;
     const Vec3 zero = std::abs(g.k1) <= std::abs(g.k2) ? g.d1 : g.d2;
     const SurfacePoint p = walker.project(g.point);
@@ -2198,7 +2197,7 @@ BaseFamily parabolicBaseFamily(const Surface& surface, const LayingOptions& opti
   checkOptions(options);
   const SurfaceWalker walker(surface, options.cell);
   const DirectionField field(walker, parseFieldSpec(options.field));
-  const std::optional<Family> family = familyAlongZeroCurvature(walker, field);
+  const std::optional<Family> family = familyAlongZeroCurvature(walker, field, surface.samples(kParabolicSamples));
   if (!family) return BaseFamily::Auto;
   return *family == Family::First ? BaseFamily::First : BaseFamily::Conjugate;
 }
@@ -2226,18 +2225,15 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
   // rulings (a sampled wavy cylinder at 10000 faces: no solve converged). L0 starts on the nearest ruling
   // that is clearly curved instead, where its direction is the ruling's.
   const std::vector<LocalGeometry> samples = surface.samples(kParabolicSamples);
-  const bool developable = samplesDevelopable(samples, MeshSurface::kCurvedScale / surface.bounds().diagonal().norm());
+  const bool developable = isDevelopable(surface, &samples);
   std::string startNote;
-  if (developable) {
-    std::vector<double> kmax;
-    for (const LocalGeometry& s : samples) kmax.push_back(std::max(std::abs(s.k1), std::abs(s.k2)));
-    std::nth_element(kmax.begin(), kmax.begin() + kmax.size() / 2, kmax.end());
-    const double curved = kPlanarStart * kmax[kmax.size() / 2];
-    auto kmaxOf = [](const LocalGeometry& s) { return std::max(std::abs(s.k1), std::abs(s.k2)); };
-    if (kmaxOf(start.g) < curved) {
+  if (developable && !samples.empty()) {
+    const double curved = planarBelow(samples);
+    if (start.g.largestCurvature() < curved) {
       const LocalGeometry* nearest = nullptr;
       for (const LocalGeometry& s : samples)
-        if (kmaxOf(s) >= curved && (!nearest || (s.point - start.point()).norm() < (nearest->point - start.point()).norm()))
+        if (s.largestCurvature() >= curved &&
+            (!nearest || (s.point - start.point()).norm() < (nearest->point - start.point()).norm()))
           nearest = &s;
       if (nearest) {
         startNote = "L0 starts at " + describe(walker, walker.project(nearest->point)) + ", the nearest clearly curved "
@@ -2276,7 +2272,7 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
     // vote by label would not do where the profile has inflections: there k1 and k2 swap (the curved
     // direction's curvature changes sign), and so do the labels of the ruling.
     const std::optional<Family> alongZero =
-        developable ? std::nullopt : familyAlongZeroCurvature(walker, field);
+        developable ? std::nullopt : familyAlongZeroCurvature(walker, field, samples);
     family = alongZero ? *alongZero
                             : normalCurvature(*dF) < (1 - 1e-9) * normalCurvature(*dG) ? Family::First
                                                                                        : Family::Conjugate;
@@ -2301,6 +2297,12 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
   repairLaidTriangulation(t, surface, options.repairSweeps, cancel);
   if (progress) progress({"triangulate", 1.0, std::to_string(t.mesh.F.rows()) + " triangles laid"});
   return t;
+}
+
+bool isDevelopable(const Surface& surface, const std::vector<LocalGeometry>* samples) {
+  if (const auto* mesh = dynamic_cast<const MeshSurface*>(&surface)) return mesh->developable();
+  const double curvedAbove = MeshSurface::kCurvedScale / surface.bounds().diagonal().norm();
+  return samplesDevelopable(samples ? *samples : surface.samples(kParabolicSamples), curvedAbove);
 }
 
 void repairLaidTriangulation(Triangulation& triangulation, const Surface& surface, int repairSweeps,

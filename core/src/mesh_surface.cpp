@@ -399,10 +399,7 @@ MeshSurface::MeshSurface(TriMesh mesh, std::string name) : mesh_(std::move(mesh)
     // directions differ by a trace: a saddle with kmin = kmax and the ruling as an asymptotic direction (L0
     // on a corrugated field failed there, at 500 and 800 faces). Where both curvatures are that small the
     // point is taken as parabolic too.
-    std::vector<double> kmax;
-    for (const LocalGeometry& g : vertexGeometry_) kmax.push_back(std::max(std::abs(g.k1), std::abs(g.k2)));
-    std::nth_element(kmax.begin(), kmax.begin() + kmax.size() / 2, kmax.end());
-    planarBelow_ = kPlanarShare * kmax[kmax.size() / 2];
+    planarBelow_ = planarBelow(vertexGeometry_);
     for (LocalGeometry& g : vertexGeometry_) snapDevelopable(g);
     findRulings();
     for (int v = 0; v < nv; ++v) alongRuling(vertexGeometry_[v], rulings_[v]);
@@ -558,7 +555,7 @@ LocalGeometry MeshSurface::geometryInTriangle(int f, const Vec3& barycentric) co
   LocalGeometry g = principalFrame(point, normalized(normal), tensor);
   if (developable_) {
     snapDevelopable(g);
-    if (std::max(std::abs(g.k1), std::abs(g.k2)) < planarBelow_) {
+    if (g.largestCurvature() < planarBelow_) {
       const Vec3& first = rulings_[mesh_.F(f, 0)];
       Vec3 ruling = Vec3::Zero();
       for (int k = 0; k < 3; ++k) {
@@ -584,7 +581,7 @@ void MeshSurface::findRulings() {
     const LocalGeometry& g = vertexGeometry_[v];
     // Boundary vertices' one-sided fits are the least sure of their directions (a corrugated field's last
     // column had its "ruling" along the boundary): they borrow too, as do the few whose fit was not parabolic.
-    if (std::max(std::abs(g.k1), std::abs(g.k2)) < planarBelow_ || onBoundary_[v] || (g.k1 != 0 && g.k2 != 0))
+    if (g.largestCurvature() < planarBelow_ || onBoundary_[v] || (g.k1 != 0 && g.k2 != 0))
       continue;
     rulings_[v] = g.k2 == 0 ? g.d2 : g.d1;
     known[v] = 1;
@@ -628,7 +625,7 @@ void MeshSurface::findRulings() {
 // Principal directions along `ruling` (and across it) at a developable's planar point: the ruling takes the
 // zero curvature.
 void MeshSurface::alongRuling(LocalGeometry& g, const Vec3& ruling) const {
-  if (!(std::max(std::abs(g.k1), std::abs(g.k2)) < planarBelow_)) return;
+  if (!(g.largestCurvature() < planarBelow_)) return;
   Vec3 r = ruling - ruling.dot(g.normal) * g.normal;
   if (!(norm(r) > 1e-9)) return;
   r = normalized(r);
@@ -637,7 +634,7 @@ void MeshSurface::alongRuling(LocalGeometry& g, const Vec3& ruling) const {
 }
 
 void MeshSurface::snapDevelopable(LocalGeometry& g) const {
-  const double ratio = std::max(std::abs(g.k1), std::abs(g.k2)) < planarBelow_ ? 1.0 : kDevelopableRatio;
+  const double ratio = g.largestCurvature() < planarBelow_ ? 1.0 : kDevelopableRatio;
   if (std::abs(g.k2) <= ratio * std::abs(g.k1)) g.k2 = 0;
   else if (std::abs(g.k1) <= ratio * std::abs(g.k2)) g.k1 = 0;
 }

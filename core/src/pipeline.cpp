@@ -241,7 +241,7 @@ double sectionBendingMixed(const Surface& surface, double degrees) {
     const Vec3 d = g.normal.cross(planes);
     if (!(d.norm() > 1e-9)) continue;
     const Vec2 t = tangentVector(g, d.normalized());
-    const double kn = secondFundamentalForm(g, t, t), kmax = std::max(std::abs(g.k1), std::abs(g.k2));
+    const double kn = secondFundamentalForm(g, t, t), kmax = g.largestCurvature();
     if (std::abs(kn) > 0.05 * kmax) ++(kn > 0 ? up : down);
   }
   return up + down == 0 ? 0.0 : double(std::min(up, down)) / double(up + down);
@@ -488,14 +488,6 @@ double relayCell(double cell, double count, int faces, double exponent, double e
 }
 
 namespace {
-
-// Whether `surface` is a developable: an uploaded mesh that MeshSurface found one (its vanishing curvature
-// then set to 0), or an analytic surface with one principal curvature under kDevelopableRatio of
-// the other at kDevelopableShare of 400 samples where it is curved.
-bool isDevelopable(const Surface& surface) {
-  if (const auto* mesh = dynamic_cast<const MeshSurface*>(&surface)) return mesh->developable();
-  return samplesDevelopable(surface.samples(400), MeshSurface::kCurvedScale / surface.bounds().diagonal().norm());
-}
 
 // What a noisy uploaded mesh (MeshSurface::noise) does to the method, said in the notes and in the errors of
 // a lay that fails on it; empty for any other surface.

@@ -44,6 +44,10 @@ constexpr double kDevelopableShare = 0.95;
 // Whether `samples` are those of a developable: curved (max |k| over `curvedAbove`) at half of them or more,
 // and one principal curvature under kDevelopableRatio of the other at kDevelopableShare of those.
 bool samplesDevelopable(const std::vector<LocalGeometry>& samples, double curvedAbove);
+// A developable's point whose largest curvature is under kPlanarShare of the samples' median is taken as
+// planar (about an inflection of the profile, or on a flat part): the bound, from `samples` (not empty).
+constexpr double kPlanarShare = 0.2;
+double planarBelow(const std::vector<LocalGeometry>& samples);
 
 // The direction conjugate to the tangent direction t (2D, any length): the unit t' with II(t, t') = 0, i.e.
 // k1 t.x t'.x + k2 t.y t'.y = 0, oriented counterclockwise from t (t x t' >= 0 seen from the normal).

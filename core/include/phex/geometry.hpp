@@ -1,5 +1,8 @@
 // phex — basic geometric types shared by every stage.
 #pragma once
+#include <algorithm>
+#include <cmath>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -23,6 +26,7 @@ struct LocalGeometry {
 
   double gaussianCurvature() const { return k1 * k2; }
   double meanCurvature() const { return 0.5 * (k1 + k2); }
+  double largestCurvature() const { return std::max(std::abs(k1), std::abs(k2)); }
 };
 
 }  // namespace phex

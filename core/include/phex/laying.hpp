@@ -78,6 +78,11 @@ double stepLowerBound(double r, double b);
 Triangulation layTriangulation(const Surface& surface, const LayingOptions& options, const ProgressFn& progress = {},
                                const CancelFlag* cancel = nullptr);
 
+// Whether `surface` is a developable: an uploaded mesh that MeshSurface found one (its vanishing curvature
+// then set to 0), or an analytic surface with one principal curvature under kDevelopableRatio of the other
+// at kDevelopableShare of its 400 samples where it is curved (`samples`, if given, are those samples).
+bool isDevelopable(const Surface& surface, const std::vector<LocalGeometry>* samples = nullptr);
+
 // The repair layTriangulation ends with (options.repairSweeps > 0): repairStars, then openInvalidBoundaryStars;
 // for a triangulation laid with repairSweeps = 0 and repaired later (the face-count loop repairs only the lay
 // it keeps). Nothing where repairSweeps is 0.

@@ -68,7 +68,6 @@ class MeshSurface : public Surface {
   // where both are small (under kPlanarShare of the vertices' median largest curvature: about an inflection
   // of a corrugated profile, whose planar points the fits give no sharp ratio).
   bool developable() const { return developable_; }
-  static constexpr double kPlanarShare = 0.2;
   static constexpr double kCurvedScale = 1e-6;
 
  private:
