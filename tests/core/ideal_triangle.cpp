@@ -168,7 +168,7 @@ TEST_CASE("ideal triangle: a star is valid iff its Dupin hexagon is simple (Prop
         boundary |= std::abs(cross(t[(i + 1) % 3] - *m, t[(i + 2) % 3] - *m)) < 1e-3 * area;
     } else {
       for (const Vec2& e : edges)
-        boundary |= std::abs(secondFundamentalForm(g, e, e)) < 1e-3 * std::max(std::abs(g.k1), std::abs(g.k2)) * e.squaredNorm();
+        boundary |= std::abs(secondFundamentalForm(g, e, e)) < 1e-3 * g.largestCurvature() * e.squaredNorm();
     }
     if (boundary) continue;
     INFO("k1 = " << g.k1 << ", k2 = " << g.k2 << ", a = " << a.transpose() << ", b = " << b.transpose());

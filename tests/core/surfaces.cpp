@@ -100,7 +100,7 @@ TEST_CASE("surfaces: closest point of a point off the surface along the normal i
     for (const Vec2& uv : samples(*s)) {
       const LocalGeometry g = s->geometryAt(uv.x(), uv.y());
       // Well inside the focal distance on either side, so that the foot is the nearest point.
-      const double kmax = std::max(std::abs(g.k1), std::abs(g.k2));
+      const double kmax = g.largestCurvature();
       const double offset = 0.05 * std::min(size, kmax > 0 ? 1 / kmax : size);
       for (double sign : {-1.0, 1.0}) {
         const LocalGeometry f = s->closestPoint(g.point + sign * offset * g.normal);
