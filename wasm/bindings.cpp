@@ -233,6 +233,7 @@ val resultToJs(const phex::PipelineResult& r) {
   out.set("duality", std::string(phex::dualityName(r.duality)));
   out.set("method", std::string(phex::triangulationMethodName(r.method)));
   out.set("field", r.field);
+  out.set("surfaceReused", r.surfaceReused);
   return out;
 }
 
@@ -398,6 +399,8 @@ val fabrication(val mesh, val options) {
   });
 }
 
+void clearUploadCache() { phex::clearUploadCache(); }
+
 double heapBytes() { return static_cast<double>(emscripten::val::module_property("HEAPU8")["byteLength"].as<double>()); }
 
 // Bytes malloc has handed out and not taken back: flat across runs when nothing leaks.
@@ -414,4 +417,5 @@ EMSCRIPTEN_BINDINGS(phex) {
   emscripten::function("surfacePreview", &surfacePreview);
   emscripten::function("fabrication", &fabrication);
   emscripten::function("mallocedBytes", &mallocedBytes);
+  emscripten::function("clearUploadCache", &clearUploadCache);
 }

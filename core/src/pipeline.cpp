@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
+#include <mutex>
 #include <sstream>
 
 #include "phex/direction_field.hpp"
@@ -99,6 +102,76 @@ TriMesh uploadedMesh(const MeshInput& in) {
   return readMeshBytes(in.bytes.data(), in.bytes.size(), in.format, in.name.empty() ? "mesh" : in.name);
 }
 
+// The last upload's MeshSurface, kept for the next run on the same bytes (see clearUploadCache). The bytes
+// are named by two independent 64-bit hashes and their length, with the format and the name.
+struct UploadKey {
+  std::uint64_t a = 0, b = 0;
+  std::size_t size = 0;
+  std::string format, name;
+  bool operator==(const UploadKey& o) const {
+    return a == o.a && b == o.b && size == o.size && format == o.format && name == o.name;
+  }
+};
+
+UploadKey uploadKey(const MeshInput& in) {
+  UploadKey k;
+  k.size = in.bytes.size();
+  k.format = in.format;
+  k.name = in.name;
+  // Eight bytes at a time (a 50 MB STL in about 20 ms): an FNV-style lane and a multiply-rotate one.
+  std::uint64_t a = 0xcbf29ce484222325ULL ^ k.size, b = 0x9e3779b97f4a7c15ULL + k.size;
+  auto mix = [&](std::uint64_t w) {
+    a = (a ^ w) * 0x100000001b3ULL;
+    a ^= a >> 29;
+    b += w * 0xbf58476d1ce4e5b9ULL;
+    b = ((b << 31) | (b >> 33)) * 0x94d049bb133111ebULL;
+  };
+  const std::uint8_t* p = in.bytes.data();
+  std::size_t i = 0;
+  for (; i + 8 <= k.size; i += 8) {
+    std::uint64_t w;
+    std::memcpy(&w, p + i, 8);
+    mix(w);
+  }
+  std::uint64_t tail = 0;
+  for (std::size_t j = 0; i + j < k.size; ++j) tail |= std::uint64_t(p[i + j]) << (8 * j);
+  mix(tail);
+  k.a = a;
+  k.b = b;
+  return k;
+}
+
+struct UploadCache {
+  std::mutex mutex;
+  UploadKey key;
+  std::shared_ptr<const MeshSurface> surface;
+};
+
+UploadCache& uploadCache() {
+  static UploadCache cache;
+  return cache;
+}
+
+// The MeshSurface of an upload: the cached one when the bytes are the same (`reused`), else built (and kept).
+std::shared_ptr<const MeshSurface> uploadedSurface(const MeshInput& in, bool& reused) {
+  const UploadKey key = uploadKey(in);
+  UploadCache& cache = uploadCache();
+  {
+    const std::lock_guard<std::mutex> lock(cache.mutex);
+    if (cache.surface && cache.key == key) {
+      reused = true;
+      return cache.surface;
+    }
+    cache.surface.reset();  // the previous upload's goes first, so that two are never held at once
+  }
+  auto surface = std::make_shared<const MeshSurface>(uploadedMesh(in), in.name);
+  const std::lock_guard<std::mutex> lock(cache.mutex);
+  cache.key = key;
+  cache.surface = surface;
+  reused = false;
+  return surface;
+}
+
 }  // namespace
 
 void validate(const PipelineParams& p) {
@@ -121,6 +194,13 @@ void validate(const PipelineParams& p) {
     fail("the lattice method needs an analytic surface; use method 'progressive' or 'prespecified' for an uploaded mesh");
 }
 
+void clearUploadCache() {
+  UploadCache& cache = uploadCache();
+  const std::lock_guard<std::mutex> lock(cache.mutex);
+  cache.surface.reset();
+  cache.key = UploadKey{};
+}
+
 SurfacePreview surfacePreview(const PipelineParams& params) {
   validate(params);
   SurfacePreview out;
@@ -131,9 +211,10 @@ SurfacePreview surfacePreview(const PipelineParams& params) {
     out.mesh = st.surface->mesh();
     geo = st.surface->vertexGeometries();
   } else if (params.mesh) {
-    const MeshSurface s(uploadedMesh(*params.mesh), params.mesh->name);
-    out.mesh = s.mesh();
-    geo = s.vertexGeometries();
+    bool reused = false;
+    const std::shared_ptr<const MeshSurface> s = uploadedSurface(*params.mesh, reused);
+    out.mesh = s->mesh();
+    geo = s->vertexGeometries();
   } else {
     const ParametricSurfacePtr s = makeSurface(params.surface, params.surfaceParams);
     Triangulation t = latticeTriangulation(*s, cellForFaceCount(*s, 6000));
@@ -548,7 +629,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     t.surface = st.surface;
   } else {
     if (params.mesh) {
-      t.surface = std::make_shared<MeshSurface>(uploadedMesh(*params.mesh), params.mesh->name);
+      t.surface = uploadedSurface(*params.mesh, t.surfaceReused);
     } else {
       t.surface = makeSurface(params.surface, params.surfaceParams);
     }
@@ -908,6 +989,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   r.method = stage.method;
   r.field = stage.field;
   r.surface = std::move(stage.surface);
+  r.surfaceReused = stage.surfaceReused;
   r.triangulation = std::move(stage.triangulation);
   r.check = std::move(stage.check);
   const Surface& surface = *r.surface;

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "phex/error.hpp"
+#include "phex/mesh_surface.hpp"
 #include "phex/pipeline.hpp"
 #include "phex/surfaces.hpp"
 
@@ -811,6 +812,40 @@ TEST_CASE("pipeline: a vault on a flat apron, a developable with planar points, 
     checkPlanarAsLaid(r);
     CHECK(r.check.coverage > 0.95);
   }
+}
+
+TEST_CASE("pipeline: a run on the same upload reuses its MeshSurface, with the same result") {
+  clearUploadCache();
+  PipelineParams p;
+  p.mesh = heightFieldUpload("dome", 40, [](double x, double y) { return 0.4 - 0.2 * (x * x + y * y); });
+  p.faces = 300;
+  const PipelineResult first = runPipeline(p);
+  CHECK_FALSE(first.surfaceReused);
+  const PipelineResult again = runPipeline(p);
+  CHECK(again.surfaceReused);
+  CHECK(again.surface == first.surface);  // the very object
+  REQUIRE(again.hex.V.rows() == first.hex.V.rows());
+  CHECK(again.hex.V == first.hex.V);  // bit for bit
+  CHECK(surfacePreview(p).mesh.V == dynamic_cast<const MeshSurface&>(*first.surface).mesh().V);
+  CHECK(runPipeline(p).surfaceReused);  // the preview kept it too
+  // Other bytes, or the same bytes under another name (it names the surface in the notes): built anew.
+  PipelineParams other = p;
+  other.mesh = heightFieldUpload("dome", 40, [](double x, double y) { return 0.4 - 0.21 * (x * x + y * y); });
+  CHECK_FALSE(runPipeline(other).surfaceReused);
+  CHECK_FALSE(runPipeline(p).surfaceReused);  // one upload is kept at a time
+  other = p;
+  other.mesh->name = "dome-2.obj";
+  CHECK_FALSE(runPipeline(other).surfaceReused);
+  clearUploadCache();
+  CHECK_FALSE(runPipeline(other).surfaceReused);
+  // A malformed upload is not kept (the one before was let go as it was read).
+  PipelineParams bad = p;
+  bad.mesh->bytes.resize(bad.mesh->bytes.size() / 2);
+  bad.mesh->bytes.insert(bad.mesh->bytes.end(), {'f', ' ', '9', '9', '9', '9', '9', ' ', '1', ' ', '2', '\n'});
+  CHECK_THROWS_AS(runPipeline(bad), Error);
+  CHECK_FALSE(runPipeline(other).surfaceReused);
+  CHECK(runPipeline(other).surfaceReused);
+  clearUploadCache();
 }
 
 TEST_CASE("pipeline: the panels around a hole in an uploaded mesh keep to its rim") {

@@ -312,6 +312,25 @@ test("an uploaded dome is laid along plane sections under 'auto', and section:DE
   }
 });
 
+test('runs on the same upload reuse its surface, with the same result, until clearUploadCache', async () => {
+  const mesh = gridOBJ(40, 40, (u, v) => {
+    const x = -1 + 2 * u, y = -1 + 2 * v;
+    return [x, y, 0.4 - 0.2 * (x * x + y * y)];
+  });
+  const upload = { mesh, meshFormat: 'obj', meshName: 'cap.obj', faces: 400 };
+  await phex.clearUploadCache();
+  const first = await phex.run(upload);
+  assert.equal(first.surfaceReused, false);
+  const again = await phex.run(upload);
+  assert.equal(again.surfaceReused, true);
+  assert.deepEqual(again.hex.positions, first.hex.positions);
+  assert.equal((await phex.run({ surface: 'torus', faces: 300 })).surfaceReused, false);
+  assert.equal((await phex.run({ ...upload, faces: 300 })).surfaceReused, true); // an analytic run leaves it
+  assert.equal((await phex.run({ ...upload, meshName: 'other.obj' })).surfaceReused, false); // another design
+  await phex.clearUploadCache();
+  assert.equal((await phex.run({ ...upload, meshName: 'other.obj' })).surfaceReused, false);
+});
+
 test("duality: 'auto' solves from the tangent dual as well where the Dupin one stalls, and says which won", async () => {
   const auto = await phex.run({ surface: 'cyclide', faces: 3000 });
   assert.equal(auto.duality, 'tangent');

@@ -29,3 +29,28 @@ test(`${RUNS} runs leave the wasm heap flat`, async () => {
   console.log(`${measure}: ${afterWarmUp[measure]} after run ${WARM_UP}, ${end[measure]} after run ${RUNS} (${growth} bytes)`);
   assert.ok(growth <= SLACK_BYTES, `${measure} grew by ${growth} bytes from run ${WARM_UP} to run ${RUNS}`);
 });
+
+test('clearUploadCache gives the memory of an upload back', async () => {
+  const phex = await createPHex();
+  const n = 120;
+  const lines = [];
+  for (let j = 0; j <= n; j++) for (let i = 0; i <= n; i++) lines.push(`v ${-1 + (2 * i) / n} ${-1 + (2 * j) / n} ${0.3 * Math.sin(3 * i / n)}`);
+  for (let j = 0; j < n; j++) {
+    for (let i = 0; i < n; i++) {
+      const a = j * (n + 1) + i + 1;
+      lines.push(`f ${a} ${a + 1} ${a + n + 2}`, `f ${a} ${a + n + 2} ${a + n + 1}`);
+    }
+  }
+  const upload = { mesh: new TextEncoder().encode(lines.join('\n')), meshFormat: 'obj', faces: 200 };
+  await phex.run({ surface: 'torus', faces: 200 });
+  const before = await phex.memory();
+  if (before.usedBytes === null) return phex.dispose(); // this build cannot tell
+  await phex.run(upload);
+  const kept = await phex.memory();
+  await phex.clearUploadCache();
+  const after = await phex.memory();
+  phex.dispose();
+  console.log(`used bytes: ${before.usedBytes} before the upload, ${kept.usedBytes} with it kept, ${after.usedBytes} after clearUploadCache`);
+  assert.ok(kept.usedBytes > before.usedBytes + 2 ** 20, 'the upload\'s surface is kept');
+  assert.ok(after.usedBytes <= before.usedBytes + SLACK_BYTES, 'and let go');
+});

@@ -36,7 +36,11 @@ async function main(): Promise<void> {
       const preview = await phex.surfacePreview(params);
       console.log(preview.k1.length + preview.k2.length + preview.triangles.length);
     }
-    if (capabilities.meshInput) console.log((await phex.run(upload)).metrics.faceCount);
+    if (capabilities.meshInput) {
+      const reused: boolean = (await phex.run(upload)).surfaceReused;
+      const cleared: void = await phex.clearUploadCache();
+      console.log(reused, cleared);
+    }
     const memory: MemoryUse = await phex.memory();
     console.log(memory.heapBytes, memory.usedBytes ?? 'unknown');
   } catch (error) {

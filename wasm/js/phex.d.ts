@@ -219,6 +219,9 @@ export interface Result {
   method: Exclude<Method, 'auto'>;
   /** The direction field the conjugate methods laid along ('auto' resolved); '' for lattice and subdivision. */
   field: string;
+  /** The uploaded mesh's surface (its estimated curvature and search structures) came from the previous run or
+   * preview on the same upload: see {@link PHex.clearUploadCache}. Always false for analytic surfaces. */
+  surfaceReused: boolean;
 }
 
 /** A triangulation method (§5): see {@link RunParams.method}. */
@@ -449,6 +452,13 @@ export interface PHex {
   surfacePreview(params: RunParams, options?: { signal?: AbortSignal }): Promise<SurfacePreview>;
   /** Memory of the wasm instance (in the worker, if any), measured between runs. */
   memory(): Promise<MemoryUse>;
+  /**
+   * Lets go of the last uploaded mesh's surface. Runs and previews on the same upload (the same bytes, format
+   * and name) reuse it instead of reading the file and estimating its curvature again (a second or more for a
+   * million triangles); one upload is kept at a time. Call it when the design is closed to free its memory.
+   * Queued like run().
+   */
+  clearUploadCache(): Promise<void>;
   /**
    * The faces of a polygon mesh (a run's `hex`) laid flat, true to size, for cutting: with format 'svg' (the
    * default) a cut sheet of outlines labelled P1..Pn (face n, seen from its normal side), with 'csv' the panel

@@ -328,6 +328,14 @@ class PHex {
   }
 
   /**
+   * Lets go of the last uploaded mesh's surface (its estimated curvature and search structures), which runs and
+   * previews on the same upload reuse (result.surfaceReused). Queued like run(); resolves when done.
+   */
+  clearUploadCache() {
+    return this.#enqueue(() => this.#backend.call('clearUploadCache', [])).then(() => undefined);
+  }
+
+  /**
    * The faces of a polygon mesh (a run's `hex`) laid flat, true to size, for cutting: an SVG cut sheet of
    * outlines labelled P1..Pn (face n, seen from its normal side) or, with format 'csv', the panel schedule.
    * Resolves to the text.

@@ -64,6 +64,11 @@ export async function loadEngine() {
     fabrication(mesh, options) {
       return answer(core.fabrication(mesh, options));
     },
+    /** Lets the last upload's surface go (see PHex.clearUploadCache). */
+    clearUploadCache() {
+      if (typeof core.clearUploadCache === 'function') core.clearUploadCache();
+      return { ok: true };
+    },
     /** Heap size, and the bytes malloc has handed out where the binding can tell (else null). */
     memory() {
       return {
@@ -87,7 +92,7 @@ function serve() {
     ({ version, surfaces, capabilities }) => postMessage({ type: 'ready', info: { version, surfaces, capabilities } }),
     (error) => postMessage({ type: 'failed', message: `could not load the phex wasm module: ${error?.message ?? error}` }),
   );
-  const METHODS = ['run', 'surfacePreview', 'memory', 'fabrication'];
+  const METHODS = ['run', 'surfacePreview', 'memory', 'fabrication', 'clearUploadCache'];
   addEventListener('message', async ({ data }) => {
     if (data?.type !== 'call' || !METHODS.includes(data.method)) return;
     const engine = await ready;

@@ -104,6 +104,8 @@ struct PipelineResult {
   bool foldsAllowed = false;
   // The solver the kept result comes from (the one asked for).
   PlanarizeMethod solverUsed = PlanarizeMethod::LocalGlobal;
+  // The uploaded mesh's MeshSurface came from the previous run on the same upload (clearUploadCache).
+  bool surfaceReused = false;
   std::vector<StageTiming> timings;
   double totalMilliseconds = 0.0;
 };
@@ -123,6 +125,13 @@ TriangulationMethod resolveMethod(const PipelineParams& params);
 // (SurfaceSpec::field) when `params.field` is the default "principal"; otherwise `params.field`.
 std::string resolveField(const PipelineParams& params);
 
+// An uploaded mesh's MeshSurface (its estimated curvature and closest-point structures: 1.3 s natively for a
+// million triangles, most of a run on a big upload) is kept after the run, and the next run or surfacePreview
+// on the same upload (the same bytes, format and name) reuses it: editing the parameters of one design pays for
+// it once. One upload is kept at a time, released before another is read. This lets it go (its memory: some 40 MB
+// for a 120k-triangle upload), as an app does when the design is closed. Safe to call from any thread.
+void clearUploadCache();
+
 // Throws Error(InvalidParameter) naming the first parameter that is wrong.
 void validate(const PipelineParams& params);
 
@@ -131,6 +140,7 @@ struct TriangulationStage {
   TriangulationMethod method;  // the method used (Auto resolved)
   std::string field;           // the field a conjugate method laid along (Auto resolved), else empty
   SurfacePtr surface;
+  bool surfaceReused = false;  // PipelineResult::surfaceReused
   Triangulation triangulation;
   TriangulationCheck check;
 };
