@@ -570,13 +570,28 @@ double relayCell(double cell, double count, int faces, double exponent, double e
 
 namespace {
 
-// What a noisy uploaded mesh (MeshSurface::noise) does to the method, said in the notes and in the errors of
-// a lay that fails on it; empty for any other surface.
+// Creases of fewer edges than this (a stray pair of flipped slivers) go unmentioned.
+constexpr int kCreaseEdges = 3;
+
+// What a noisy uploaded mesh (MeshSurface::noise), or one with a crease, does to the method, said in the notes
+// and in the errors of a lay that fails on it; empty for any other surface.
 std::string noiseNote(const Surface* surface) {
   const auto* mesh = dynamic_cast<const MeshSurface*>(surface);
-  if (!mesh || !(mesh->noise() > MeshSurface::kNoisyMesh)) return "";
+  if (!mesh) return "";
   std::ostringstream s;
   s.precision(2);
+  if (!(mesh->noise() > MeshSurface::kNoisyMesh)) {
+    // A ridge or fold (a gable roof): the method needs a tangent plane everywhere (§3), and a panel across
+    // the crease cannot be planar. A noisy mesh's sharp edges are its noise, said below instead.
+    const MeshSurface::Creases& c = mesh->creases();
+    if (c.edges < kCreaseEdges) return "";
+    s << "the uploaded mesh has a crease: " << c.edges << " edges where its triangles turn by more than "
+      << MeshSurface::kCreaseDegrees << " degrees, the sharpest by " << std::lround(c.degrees) << " near ("
+      << c.at.x() << ", " << c.at.y() << ", " << c.at.z()
+      << "); phex tiles smooth surfaces (§3: there is no tangent plane on a crease), and a panel across it "
+         "cannot be planar: tile the parts on either side as meshes of their own, or round the crease off";
+    return s.str();
+  }
   s << "the uploaded mesh is noisy: its vertices lie " << 100 * mesh->noise()
     << " % of an edge (median) off smooth cubic fits of their neighbourhoods, so its curvature was fitted over "
     << mesh->curvatureRings() << " rings of neighbours instead of 2; conjugate directions from a noisy mesh "

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "phex/error.hpp"
+#include "phex/mesh_io.hpp"
 #include "phex/mesh_surface.hpp"
 #include "phex/pipeline.hpp"
 #include "phex/surfaces.hpp"
@@ -846,6 +847,44 @@ TEST_CASE("pipeline: a run on the same upload reuses its MeshSurface, with the s
   CHECK_FALSE(runPipeline(other).surfaceReused);
   CHECK(runPipeline(other).surfaceReused);
   clearUploadCache();
+}
+
+TEST_CASE("pipeline: an upload with a crease says where it is, and a smooth or merely folded one says nothing") {
+  // A gable roof: two planes meeting at a ridge turning by 44 degrees. No tangent plane there (§3), and a panel
+  // across it cannot be planar; before, the run only stopped short of planarity (exit 2), with no word why.
+  PipelineParams p;
+  p.mesh = heightFieldUpload("gable", 60, [](double, double y) { return 0.4 - 0.4 * std::abs(y); });
+  p.faces = 300;
+  const TriangulationStage gable = triangulate(p);
+  const std::string notes = allNotes(gable.triangulation);
+  INFO(notes);
+  CHECK(notes.find("the uploaded mesh has a crease: 60 edges") != std::string::npos);
+  CHECK(notes.find("the sharpest by 44") != std::string::npos);
+  // A smooth vault, and the same with vertices pushed past their neighbours in the plan (a broken grid, not a
+  // ridge): its triangles fold back over each other, turning by nearly 180 degrees. No crease either way.
+  for (const bool folded : {false, true}) {
+    std::ostringstream obj;
+    const int n = 60;
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        double x = -1 + 2.0 * i / n;
+        const double y = -1 + 2.0 * j / n;
+        if (folded && j % 10 == 5 && i % 10 == 5) x += 1.6 * 2.0 / n;
+        obj << "v " << x << ' ' << y << ' ' << 0.5 - 0.3 * y * y << '\n';
+      }
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 2, d = a + n + 1;
+        obj << "f " << a << ' ' << b << ' ' << c << "\nf " << a << ' ' << c << ' ' << d << '\n';
+      }
+    const std::string text = obj.str();
+    p.mesh = MeshInput{std::vector<std::uint8_t>(text.begin(), text.end()), "obj", "vault.obj"};
+    const MeshSurface surface(readMeshBytes(p.mesh->bytes.data(), p.mesh->bytes.size(), "obj", "vault.obj"));
+    CHECK(surface.creases().edges == 0);
+    const std::string smooth = allNotes(triangulate(p).triangulation);
+    INFO(smooth);
+    CHECK(smooth.find("crease") == std::string::npos);
+  }
 }
 
 TEST_CASE("pipeline: the panels around a hole in an uploaded mesh keep to its rim") {

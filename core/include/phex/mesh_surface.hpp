@@ -69,6 +69,17 @@ class MeshSurface : public Surface {
   // of a corrugated profile, whose planar points the fits give no sharp ratio).
   bool developable() const { return developable_; }
   static constexpr double kCurvedScale = 1e-6;
+  // Interior edges where the two triangles' planes turn by more than kCreaseDegrees (and at most kFoldDegrees,
+  // beyond which the triangles fold back over each other: a broken mesh, not a ridge; slivers aside): a ridge
+  // or a valley, where the surface has no tangent plane. How many, the sharpest turn (degrees) and the middle
+  // of its edge.
+  struct Creases {
+    int edges = 0;
+    double degrees = 0;
+    Vec3 at = Vec3::Zero();
+  };
+  static constexpr double kCreaseDegrees = 30.0, kFoldDegrees = 150.0;
+  const Creases& creases() const { return creases_; }
 
  private:
   struct Node {
@@ -77,6 +88,8 @@ class MeshSurface : public Surface {
     int count = 0;  // leaf: number of triangles; 0 for an inner node
   };
   void buildTopology();
+  void noteCrease(int f, int g, int a, int b);
+  Creases creases_;
   // Fits every vertex's jet over at least `rings` rings; returns the median fit residual.
   double estimateCurvature(int rings);
   void buildTree();
