@@ -4,9 +4,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <mutex>
+#include <regex>
 #include <sstream>
 
 #include "phex/direction_field.hpp"
@@ -145,31 +148,80 @@ struct UploadCache {
   std::mutex mutex;
   UploadKey key;
   std::shared_ptr<const MeshSurface> surface;
+  Vec3 origin = Vec3::Zero();
 };
+
+// An upload far from the origin (site coordinates: a 20 m roof some 5000 km from it) is computed about the
+// centre of its box, where its coordinates keep their digits: at 5.4e6 a unit in the last place is 9e-10,
+// 3e-8 of an edge of 3 cm, so a planarity of 1e-9 of the edge could not even be written down (such a roof
+// stalled at 4e-9, exit 2, and its lay differed from the same roof's at the origin). Far: the centre more
+// than kFarFromOrigin diagonals away. The results come back in the file's coordinates (toFileFrame).
+constexpr double kFarFromOrigin = 10;
+
+Vec3 localOrigin(const TriMesh& mesh) {
+  if (mesh.V.rows() == 0) return Vec3::Zero();
+  const Vec3 lo = mesh.V.colwise().minCoeff().transpose(), hi = mesh.V.colwise().maxCoeff().transpose();
+  const Vec3 centre = 0.5 * (lo + hi);
+  return centre.norm() > kFarFromOrigin * (hi - lo).norm() ? centre : Vec3::Zero();
+}
 
 UploadCache& uploadCache() {
   static UploadCache cache;
   return cache;
 }
 
-// The MeshSurface of an upload: the cached one when the bytes are the same (`reused`), else built (and kept).
-std::shared_ptr<const MeshSurface> uploadedSurface(const MeshInput& in, bool& reused) {
+// The MeshSurface of an upload: the cached one when the bytes are the same (`reused`), else built (and kept);
+// in the upload's local frame: the file's coordinates less `origin` (localOrigin).
+std::shared_ptr<const MeshSurface> uploadedSurface(const MeshInput& in, bool& reused, Vec3& origin) {
   const UploadKey key = uploadKey(in);
   UploadCache& cache = uploadCache();
   {
     const std::lock_guard<std::mutex> lock(cache.mutex);
     if (cache.surface && cache.key == key) {
       reused = true;
+      origin = cache.origin;
       return cache.surface;
     }
     cache.surface.reset();  // the previous upload's goes first, so that two are never held at once
   }
-  auto surface = std::make_shared<const MeshSurface>(uploadedMesh(in), in.name);
+  TriMesh mesh = uploadedMesh(in);
+  origin = localOrigin(mesh);
+  if (origin != Vec3::Zero()) mesh.V.rowwise() -= origin.transpose();
+  auto surface = std::make_shared<const MeshSurface>(std::move(mesh), in.name);
   const std::lock_guard<std::mutex> lock(cache.mutex);
   cache.key = key;
   cache.surface = surface;
+  cache.origin = origin;
   reused = false;
   return surface;
+}
+
+// "(x, y, z)" in a note or message, in the local frame, written in the file's coordinates (with the digits
+// that the offset takes).
+std::string inFileFrame(const std::string& text, const Vec3& origin) {
+  if (origin == Vec3::Zero()) return text;
+  static const std::regex triple(R"(\((-?[0-9][0-9.eE+-]*), (-?[0-9][0-9.eE+-]*), (-?[0-9][0-9.eE+-]*)\))");
+  std::string out;
+  auto at = text.cbegin();
+  for (std::sregex_iterator it(text.begin(), text.end(), triple), end; it != end; ++it) {
+    const std::smatch& m = *it;
+    out.append(at, m[0].first);
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "(%.10g, %.10g, %.10g)", std::strtod(m[1].str().c_str(), nullptr) + origin.x(),
+                  std::strtod(m[2].str().c_str(), nullptr) + origin.y(), std::strtod(m[3].str().c_str(), nullptr) + origin.z());
+    out += buf;
+    at = m[0].second;
+  }
+  out.append(at, text.cend());
+  return out;
+}
+
+void toFileFrame(Triangulation& t, const Vec3& origin) {
+  if (origin == Vec3::Zero()) return;
+  t.mesh.V.rowwise() += origin.transpose();
+  for (std::vector<Vec3>& line : t.fieldLines)
+    for (Vec3& p : line) p += origin;
+  for (std::string& note : t.notes) note = inFileFrame(note, origin);
 }
 
 }  // namespace
@@ -212,8 +264,10 @@ SurfacePreview surfacePreview(const PipelineParams& params) {
     geo = st.surface->vertexGeometries();
   } else if (params.mesh) {
     bool reused = false;
-    const std::shared_ptr<const MeshSurface> s = uploadedSurface(*params.mesh, reused);
+    Vec3 origin;
+    const std::shared_ptr<const MeshSurface> s = uploadedSurface(*params.mesh, reused, origin);
     out.mesh = s->mesh();
+    out.mesh.V.rowwise() += origin.transpose();
     geo = s->vertexGeometries();
   } else {
     const ParametricSurfacePtr s = makeSurface(params.surface, params.surfaceParams);
@@ -601,25 +655,33 @@ std::string noiseNote(const Surface* surface) {
 }
 
 TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel,
-                                 SurfacePtr& made);
+                                 SurfacePtr& made, Vec3& origin);
+
+// triangulate in the upload's local frame (stage.origin), for runPipeline to go on in it.
+TriangulationStage triangulateLocal(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel) {
+  SurfacePtr surface;
+  Vec3 origin = Vec3::Zero();
+  try {
+    return triangulateOn(given, progress, cancel, surface, origin);
+  } catch (const Error& e) {
+    const std::string noise = noiseNote(surface.get());
+    if (e.code() != ErrorCode::CannotTile || noise.empty()) throw Error(e.code(), inFileFrame(e.what(), origin));
+    throw Error(ErrorCode::CannotTile, inFileFrame(std::string(e.what()) + " (" + noise + ")", origin));
+  }
+}
 
 }  // namespace
 
 TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel) {
-  SurfacePtr surface;
-  try {
-    return triangulateOn(given, progress, cancel, surface);
-  } catch (const Error& e) {
-    const std::string noise = noiseNote(surface.get());
-    if (e.code() != ErrorCode::CannotTile || noise.empty()) throw;
-    throw Error(ErrorCode::CannotTile, std::string(e.what()) + " (" + noise + ")");
-  }
+  TriangulationStage t = triangulateLocal(given, progress, cancel);
+  toFileFrame(t.triangulation, t.origin);
+  return t;
 }
 
 namespace {
 
 TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel,
-                                 SurfacePtr& made) {
+                                 SurfacePtr& made, Vec3& origin) {
   validate(given);
   PipelineParams params = given;
   params.method = resolveMethod(given);
@@ -644,7 +706,9 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     t.surface = st.surface;
   } else {
     if (params.mesh) {
-      t.surface = uploadedSurface(*params.mesh, t.surfaceReused);
+      t.surface = uploadedSurface(*params.mesh, t.surfaceReused, origin);
+      t.origin = origin;
+      if (params.start) *params.start -= origin;
     } else {
       t.surface = makeSurface(params.surface, params.surfaceParams);
     }
@@ -1000,11 +1064,12 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   };
 
   report("triangulate", 0, "laying the triangulation");
-  TriangulationStage stage = triangulate(params, progress, cancel);
+  TriangulationStage stage = triangulateLocal(params, progress, cancel);
   r.method = stage.method;
   r.field = stage.field;
   r.surface = std::move(stage.surface);
   r.surfaceReused = stage.surfaceReused;
+  r.origin = stage.origin;
   r.triangulation = std::move(stage.triangulation);
   r.check = std::move(stage.check);
   const Surface& surface = *r.surface;
@@ -1165,6 +1230,10 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     if (!r.dual.boundaryFace[f]) ++interior, hexagons += r.hex.faceSize(f) == 6;
   r.interiorHexagonFraction = interior ? double(hexagons) / interior : 0.0;
   clock.done("measure");
+  // Measured in the local frame; the meshes go back to the file's coordinates.
+  toFileFrame(r.triangulation, r.origin);
+  if (r.origin != Vec3::Zero())
+    for (Points* V : {&r.initial.V, &r.hex.V, &r.dual.mesh.V}) V->rowwise() += r.origin.transpose();
   r.totalMilliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (progress) progress({"done", 1, "done"});
   return r;

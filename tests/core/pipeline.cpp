@@ -887,6 +887,59 @@ TEST_CASE("pipeline: an upload with a crease says where it is, and a smooth or m
   }
 }
 
+TEST_CASE("pipeline: an upload in site coordinates, far from the origin, is tiled as at the origin") {
+  // A 20 m saddle roof in survey coordinates, some 5400 km from the origin: there a unit in the last place is
+  // 9e-10, 3e-8 of an edge, and the solve stalled at 4e-9 (exit 2) on a lay that differed from the same roof's
+  // at the origin. It is computed about the centre of its box now, and comes back in the file's coordinates.
+  const Vec3 site(512345.678, 5432109.876, 250.0);
+  auto upload = [&](const Vec3& shift, double scale) {
+    std::ostringstream obj;
+    obj.precision(17);
+    const int n = 80;
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        const double x = -1 + 2.0 * i / n, y = -1 + 2.0 * j / n;
+        obj << "v " << scale * x + shift.x() << ' ' << scale * y + shift.y() << ' ' << scale * 0.3 * (x * x - y * y) + shift.z() << '\n';
+      }
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 2, d = a + n + 1;
+        obj << "f " << a << ' ' << b << ' ' << c << "\nf " << a << ' ' << c << ' ' << d << '\n';
+      }
+    const std::string text = obj.str();
+    return MeshInput{std::vector<std::uint8_t>(text.begin(), text.end()), "obj", "roof.obj"};
+  };
+  PipelineParams p;
+  p.faces = 4000;
+  p.mesh = upload(Vec3::Zero(), 10);
+  const PipelineResult home = runPipeline(p);
+  p.mesh = upload(site, 10);
+  const PipelineResult away = runPipeline(p);
+  CHECK(home.origin == Vec3::Zero());
+  CHECK((away.origin - site).norm() < 1e-6);
+  CHECK(away.solve.converged);
+  CHECK(away.metrics.planarityMax <= 1e-9);
+  CHECK(away.metrics.faceCount == home.metrics.faceCount);
+  CHECK(away.interiorHexagonFraction == home.interiorHexagonFraction);
+  // The same mesh in the file's frame, up to what the file's last digits change in the lay (a step of the flow
+  // lines' control accepted or not): within 1 % of an edge.
+  REQUIRE(away.hex.V.rows() == home.hex.V.rows());
+  const double edge = home.metrics.edgeLengthMean;
+  CHECK(((away.hex.V.rowwise() - site.transpose()) - home.hex.V).cwiseAbs().maxCoeff() < 0.01 * edge);
+  CHECK(((away.triangulation.mesh.V.rowwise() - site.transpose()) - home.triangulation.mesh.V).cwiseAbs().maxCoeff() <
+        0.01 * edge);
+  const std::string notes = allNotes(away.triangulation);
+  INFO(notes);
+  CHECK(notes.find("near (512345.678, 5432109.876, 250)") != std::string::npos);  // the start, where the file has it
+  // The preview, and the triangulation stage alone, in the file's coordinates too.
+  CHECK((surfacePreview(p).mesh.V.colwise().mean().transpose() - site).norm() < 1);
+  const TriangulationStage t = triangulate(p);
+  CHECK((t.triangulation.mesh.V.colwise().mean().transpose() - site).norm() < 1);
+  // A start point is given in the file's coordinates.
+  p.start = site + Vec3(5, 5, 0);
+  CHECK(allNotes(runPipeline(p).triangulation).find("through (512350.") != std::string::npos);
+}
+
 TEST_CASE("pipeline: the panels around a hole in an uploaded mesh keep to its rim") {
   // A saddle with a round hole off its middle, cut out of the grid (a jagged rim). The triangulation's
   // boundary edges there are chords across the hole: the dual points of those edges, and the triangles' points

@@ -106,6 +106,10 @@ struct PipelineResult {
   PlanarizeMethod solverUsed = PlanarizeMethod::LocalGlobal;
   // The uploaded mesh's MeshSurface came from the previous run on the same upload (clearUploadCache).
   bool surfaceReused = false;
+  // An upload far from the origin (more than 10 times its size: site coordinates) is computed about the centre
+  // of its box, `origin`, where its coordinates keep their digits; the meshes here and the notes are in the
+  // file's coordinates, `surface` in the local frame (its points plus origin are the file's). Zero otherwise.
+  Vec3 origin = Vec3::Zero();
   std::vector<StageTiming> timings;
   double totalMilliseconds = 0.0;
 };
@@ -139,8 +143,9 @@ void validate(const PipelineParams& params);
 struct TriangulationStage {
   TriangulationMethod method;  // the method used (Auto resolved)
   std::string field;           // the field a conjugate method laid along (Auto resolved), else empty
-  SurfacePtr surface;
+  SurfacePtr surface;           // in the local frame: see PipelineResult::origin
   bool surfaceReused = false;  // PipelineResult::surfaceReused
+  Vec3 origin = Vec3::Zero();  // PipelineResult::origin (the triangulation is in the file's coordinates)
   Triangulation triangulation;
   TriangulationCheck check;
 };
