@@ -234,6 +234,9 @@ val resultToJs(const phex::PipelineResult& r) {
   out.set("method", std::string(phex::triangulationMethodName(r.method)));
   out.set("field", r.field);
   out.set("surfaceReused", r.surfaceReused);
+  val origin = val::array();
+  for (int k = 0; k < 3; ++k) origin.call<void>("push", r.origin(k));
+  out.set("origin", origin);
   return out;
 }
 

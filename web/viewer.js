@@ -20,6 +20,7 @@ export class Viewer {
   #raycaster = new THREE.Raycaster();
   #framed = false;
   #pending = 0;
+  #sun;
   onRender = null;
 
   constructor(container) {
@@ -33,7 +34,9 @@ export class Viewer {
     const sun = new THREE.DirectionalLight(0xffffff, 1.4);
     sun.position.set(1, 2, 3);
     this.#camera.add(sun); // a light that follows the camera keeps every side readable
-    this.#scene.add(this.#camera, this.#group);
+    // It shines at the model's centre (fitToView), which for a model in site coordinates is far from the origin.
+    this.#sun = sun;
+    this.#scene.add(this.#camera, this.#group, sun.target);
     this.#controls = new OrbitControls(this.#camera, this.#renderer.domElement);
     this.#controls.addEventListener('change', () => this.requestRender());
     new ResizeObserver(() => this.resize()).observe(container);
@@ -79,6 +82,8 @@ export class Viewer {
    * the shared vertices.
    */
   showPolygons(mesh, faceColor, { flat, wireframe }) {
+    const origin = displayOrigin(mesh.positions);
+    mesh = { ...mesh, positions: relativeTo(mesh.positions, origin) };
     const { positions, index, faceOfTriangle } = triangulateFaces(mesh);
     const shared = new THREE.BufferGeometry();
     shared.setAttribute('position', new THREE.BufferAttribute(positions, 3));
@@ -110,6 +115,8 @@ export class Viewer {
     const object = new THREE.Mesh(geometry, surfaceMaterial());
     this.#faces = { mesh: object, faceOfTriangle, flatNormals, smoothNormals };
     this.#edges = edgeLines(mesh.positions, polygonEdges(mesh));
+    object.position.copy(origin);
+    this.#edges.position.copy(origin);
     this.#group.add(object, this.#edges);
     this.recolor(faceColor);
     this.setShading({ flat, wireframe });
@@ -137,6 +144,9 @@ export class Viewer {
 
   /** A triangle mesh with per-vertex colours (or plain), its edges and optional polylines. */
   showTriangles({ positions, triangles, fieldLines }, vertexColor, { flat, wireframe }) {
+    const origin = displayOrigin(positions);
+    positions = relativeTo(positions, origin);
+    if (fieldLines) fieldLines = { ...fieldLines, positions: relativeTo(fieldLines.positions, origin) };
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute('position', new THREE.BufferAttribute(Float32Array.from(positions), 3));
     geometry.setIndex(new THREE.BufferAttribute(triangles, 1));
@@ -150,6 +160,7 @@ export class Viewer {
     geometry.setAttribute('color', new THREE.BufferAttribute(colors, 3));
     geometry.computeVertexNormals();
     const object = new THREE.Mesh(geometry, surfaceMaterial(flat));
+    object.position.copy(origin);
     this.#group.add(object);
     if (wireframe) {
       const edges = [];
@@ -157,9 +168,14 @@ export class Viewer {
         for (let k = 0; k < 3; k++) edges.push(triangles[t + k], triangles[t + ((k + 1) % 3)]);
       }
       this.#edges = edgeLines(positions, uniqueEdges(edges));
+      this.#edges.position.copy(origin);
       this.#group.add(this.#edges);
     }
-    if (fieldLines) this.#group.add(polylineObject(fieldLines));
+    if (fieldLines) {
+      const lines = polylineObject(fieldLines);
+      lines.position.copy(origin);
+      this.#group.add(lines);
+    }
     this.requestRender();
   }
 
@@ -178,10 +194,10 @@ export class Viewer {
     const box = new THREE.Box3().setFromObject(this.#group);
     if (box.isEmpty()) return;
     const sphere = box.getBoundingSphere(new THREE.Sphere());
-    const first = this.#group.children[0]?.geometry;
+    const first = this.#group.children[0];
     if (first) {
-      first.computeBoundingSphere();
-      sphere.copy(first.boundingSphere);
+      first.geometry.computeBoundingSphere();
+      sphere.copy(first.geometry.boundingSphere).translate(first.position);  // drawn about displayOrigin
     }
     const camera = this.#camera;
     const fov = THREE.MathUtils.degToRad(camera.fov);
@@ -192,6 +208,7 @@ export class Viewer {
     camera.far = distance * 10;
     camera.updateProjectionMatrix();
     this.#controls.target.copy(sphere.center);
+    this.#sun.target.position.copy(sphere.center);
     this.#controls.update();
     this.#framed = true;
     this.requestRender();
@@ -217,6 +234,39 @@ export class Viewer {
     this.render();
     return this.canvas.toDataURL('image/png');
   }
+}
+
+/**
+ * Where to draw a model from: the centre of its box when that lies more than ten times its size from the origin
+ * (site coordinates, as the core computes them: PipelineResult::origin), else the origin. WebGL's 32-bit floats
+ * keep about 7 digits, half a metre at 5400 km, where a 20 m roof's rows collapsed onto each other; its
+ * objects hold their vertices relative to that point and are placed there, and three.js composes the placement
+ * with the camera's in double precision.
+ */
+function displayOrigin(positions) {
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
+  for (let i = 0; i < positions.length; i += 3) {
+    for (let k = 0; k < 3; k++) {
+      lo[k] = Math.min(lo[k], positions[i + k]);
+      hi[k] = Math.max(hi[k], positions[i + k]);
+    }
+  }
+  const centre = new THREE.Vector3((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2);
+  const size = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+  return positions.length > 0 && centre.length() > 10 * size ? centre : new THREE.Vector3();
+}
+
+/** The positions less `origin`, in double precision (the same array when the origin is zero). */
+function relativeTo(positions, origin) {
+  if (origin.lengthSq() === 0) return positions;
+  const out = new Float64Array(positions.length);
+  for (let i = 0; i < positions.length; i += 3) {
+    out[i] = positions[i] - origin.x;
+    out[i + 1] = positions[i + 1] - origin.y;
+    out[i + 2] = positions[i + 2] - origin.z;
+  }
+  return out;
 }
 
 // One material per look, shared by every result: three.js keeps a shader program only while a material

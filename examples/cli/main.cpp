@@ -213,6 +213,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"dualFallbacks", r.dual.fallbackCount},
           {"dualUntangled", r.dual.untangled},
           {"dualityUsed", phex::dualityName(r.duality)},
+          {"origin", {r.origin.x(), r.origin.y(), r.origin.z()}},
           {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
                       {"boundaryPanelsSplit", r.boundaryPanelsSplit}, {"interiorFacesSplit", r.interiorFacesSplit},
                       {"foldsAllowed", r.foldsAllowed}, {"method", phex::methodName(r.solverUsed)}, {"log", log}}},

@@ -261,6 +261,52 @@ test('an uploaded OBJ mesh is tiled', async (t) => {
   await afterRun(() => page.click('#mesh-clear'));
 });
 
+test('an upload in site coordinates, far from the origin, is drawn as at the origin', async (t) => {
+  if ((await page.getAttribute('body', 'data-mesh-input')) !== 'true') {
+    t.skip('this phex core build has no mesh input (capabilities().meshInput is false)');
+    return;
+  }
+  // The same torus patch 5400 km from the origin: in WebGL's 32-bit floats its y would snap to half metres,
+  // and its rows collapse onto each other; drawn about its centre it looks as it does at the origin.
+  // The surface coloured by its curvature, which comes out alike in both frames (the lays differ in the file's
+  // last digits, and the panels' colours with them).
+  await page.selectOption('#view', 'curvature');
+  const drawn = async (name, obj) => {
+    await afterRun(() => page.setInputFiles('#file', { name, mimeType: 'text/plain', buffer: Buffer.from(obj) }));
+    assert.equal(await page.getAttribute('body', 'data-state'), 'ready', await page.textContent('#error'));
+    await page.click('#fit');
+    return page.locator('#viewport').screenshot();
+  };
+  const home = await drawn('patch.obj', torusPatchObj());
+  const site = torusPatchObj().replace(/^v (\S+) (\S+) (\S+)$/gm, (_, x, y, z) => `v ${Number(x) + 512345.678} ${Number(y) + 5432109.876} ${Number(z) + 250}`);
+  const away = await drawn('patch-site.obj', site);
+  // The camera frames each alike, and the light shines alike: the two pictures of the model are the same but
+  // for a few pixels along edges.
+  const { differing, drawn: total } = await page.evaluate(async (pngs) => {
+    const decode = async (data) => {
+      const bitmap = await createImageBitmap(new Blob([Uint8Array.from(atob(data), (c) => c.charCodeAt(0))]));
+      const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
+      const ctx = canvas.getContext('2d');
+      ctx.drawImage(bitmap, 0, 0);
+      return [ctx.getImageData(0, 0, bitmap.width, bitmap.height).data, bitmap.width];
+    };
+    const [[a, width], [b]] = await Promise.all(pngs.map(decode));
+    let differing = 0;
+    let drawn = 0;
+    for (let i = 0; i < a.length; i += 4) {
+      if ((i / 4) % width > 0.6 * width) continue;  // the statistics and notes, which name the coordinates
+      const d = Math.abs(a[i] - b[i]) + Math.abs(a[i + 1] - b[i + 1]) + Math.abs(a[i + 2] - b[i + 2]);
+      if (d > 24) differing++;
+      if (a[i] !== a[0] || a[i + 1] !== a[1] || a[i + 2] !== a[2]) drawn++;
+    }
+    return { differing, drawn };
+  }, [home.toString('base64'), away.toString('base64')]);
+  assert.ok(differing < 0.02 * total, `${differing} of the ${total} pixels drawn differ between the two`);
+  await page.selectOption('#view', 'hex');
+  await afterRun(() => page.click('#mesh-clear'));
+  assert.deepEqual(pageErrors, []);
+});
+
 test('a corrupt or foreign file shows an error banner and the app keeps working', async () => {
   await page.setInputFiles('#file', { name: 'notes.txt', mimeType: 'text/plain', buffer: Buffer.from('hello') });
   await page.waitForSelector('#error:not([hidden])');

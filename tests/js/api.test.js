@@ -331,6 +331,21 @@ test('runs on the same upload reuse its surface, with the same result, until cle
   assert.equal((await phex.run({ ...upload, meshName: 'other.obj' })).surfaceReused, false);
 });
 
+test('an upload in site coordinates is computed about its centre and comes back where the file has it', async () => {
+  const site = [512345.678, 5432109.876, 250];
+  const mesh = gridOBJ(60, 60, (u, v) => {
+    const x = -1 + 2 * u, y = -1 + 2 * v;
+    return [10 * x + site[0], 10 * y + site[1], 3 * (x * x - y * y) + site[2]];
+  });
+  const r = await phex.run({ mesh, meshFormat: 'obj', faces: 2000 });
+  r.origin.forEach((c, k) => assert.ok(Math.abs(c - site[k]) < 1e-6, `origin ${r.origin}`));
+  assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
+  for (let k = 0; k < 3; k++) assert.ok(Math.abs(r.hex.positions[k] - site[k]) < 20, `a node at ${r.hex.positions.slice(0, 3)}`);
+  assert.ok(r.triangulation.notes.some((note) => /512345\.678, 5432109\.876/.test(note)), r.triangulation.notes.join('\n'));
+  const home = await phex.run({ surface: 'torus', faces: 300 });
+  assert.deepEqual(home.origin, [0, 0, 0]);
+});
+
 test("duality: 'auto' solves from the tangent dual as well where the Dupin one stalls, and says which won", async () => {
   const auto = await phex.run({ surface: 'cyclide', faces: 3000 });
   assert.equal(auto.duality, 'tangent');

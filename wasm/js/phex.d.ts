@@ -222,6 +222,10 @@ export interface Result {
   /** The uploaded mesh's surface (its estimated curvature and search structures) came from the previous run or
    * preview on the same upload: see {@link PHex.clearUploadCache}. Always false for analytic surfaces. */
   surfaceReused: boolean;
+  /** An upload far from the origin (more than ten times its size: site coordinates) is computed about the
+   * centre of its box, this point, where its coordinates keep their digits; every mesh and note here is in the
+   * file's coordinates all the same. [0, 0, 0] otherwise. */
+  origin: [number, number, number];
 }
 
 /** A triangulation method (§5): see {@link RunParams.method}. */
