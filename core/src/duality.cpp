@@ -333,7 +333,9 @@ void keepWithinBoundary(const TriMesh& T, const VertexRings& rings, const std::v
     const Vec3 e = along.normalized();
     Vec3 in = (po - pa) - e * e.dot(po - pa);  // across the edge, towards the third corner
     const double across = in.norm();
-    if (!(across > 0)) return;
+    // A triangle of no area has no side to be on: its `in` would be round-off, pointing anywhere (off the
+    // surface too: a sloping plane's flat triangles sent points 7e-3 off it).
+    if (!(across > 1e-9 * along.norm())) return;
     in /= across;
     const Vec3 x = U.row(f).transpose();
     const double rim = std::max(0.0, in.dot(rimBeside(surface, 0.5 * (pa + pb)) - 0.5 * (pa + pb)));

@@ -69,6 +69,9 @@ class MeshSurface : public Surface {
   // of a corrugated profile, whose planar points the fits give no sharp ratio).
   bool developable() const { return developable_; }
   static constexpr double kCurvedScale = 1e-6;
+  // Whether the mesh is a plane (a flat façade, a sloping roof): its largest curvature under kCurvedScale /
+  // diagonal at every vertex. Its principal directions are then undefined everywhere.
+  bool planar() const { return planar_; }
   // Interior edges where the two triangles' planes turn by more than kCreaseDegrees (and at most kFoldDegrees,
   // beyond which the triangles fold back over each other: a broken mesh, not a ridge; slivers aside): a ridge
   // or a valley, where the surface has no tangent plane. How many, the sharpest turn (degrees) and the middle
@@ -106,6 +109,7 @@ class MeshSurface : public Surface {
   std::string name_;
   double noise_ = 0;
   bool developable_ = false;
+  bool planar_ = false;
   double planarBelow_ = 0;  // a developable's largest curvature under which a point counts as planar
   std::vector<Vec3> rulings_;  // a developable's ruling direction at each vertex (planar ones: borrowed)
   void snapDevelopable(LocalGeometry& g) const;
