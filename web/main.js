@@ -553,6 +553,8 @@ async function start() {
   $('mesh-clear').addEventListener('click', () => {
     setUpload(null);
     lastSurfaceKey = null;
+    // The core keeps the upload's surface for the next run on it (clearUploadCache): the design is closed.
+    phex.clearUploadCache().catch(() => {});
     compute();
   });
   $('cancel').addEventListener('click', () => running?.abort());
