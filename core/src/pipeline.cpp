@@ -737,7 +737,27 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
                         "laid in straight rows along plane sections (field section) instead";
     }
     const double cell = checkCell(*t.surface);
-    if (params.method == TriangulationMethod::Lattice) {
+    // §7 for an upload: a closed convex surface (a pebble, an egg, an ellipsoid) has umbilics and no regular
+    // conjugate network around them; Method 2 laid an uploaded ellipsoid at 3000 faces in two systems with
+    // eight zipped seams, overlapping (coverage 1.09), 86 % hexagons, 0.35 % of the diagonal off. The geodesic
+    // icosahedron mapped onto it gives valence 6 everywhere but at 12 vertices (its pentagons).
+    // Kept only where it leaves no more invalid stars than a hundredth of its vertices (else laid as below).
+    const auto* closedMesh = dynamic_cast<const MeshSurface*>(t.surface.get());
+    bool geodesic = given.method == TriangulationMethod::Auto && closedMesh && closedConvexUpload(*closedMesh);
+    if (geodesic) {
+      const double faces = params.cell > 0 ? facesAtCell(*t.surface, cell) : double(params.faces);
+      const int frequency = std::max(1, static_cast<int>(std::lround(std::sqrt(std::max(faces - 2, 10.0) / 10))));
+      Triangulation g = geodesicTriangulation(*closedMesh, frequency);
+      repairStars(g, *t.surface);
+      geodesic = checkTriangulation(g, *t.surface).invalidStars.size() <= 0.01 * double(g.mesh.V.rows());
+      if (geodesic) {
+        params.method = t.method = TriangulationMethod::Subdivision;
+        t.field.clear();
+        t.triangulation = std::move(g);
+      }
+    }
+    if (geodesic) {
+    } else if (params.method == TriangulationMethod::Lattice) {
       t.triangulation = latticeTriangulation(dynamic_cast<const ParametricSurface&>(*t.surface), cell);
       repairStars(t.triangulation, *t.surface);
     } else {

@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 #include "phex/duality.hpp"
 #include "phex/error.hpp"
 #include "phex/mesh_io.hpp"
@@ -411,6 +413,79 @@ SubdivisionTriangulation subdivisionTriangulation(const TriMesh& control, int le
                                          " edges of the triangulation are reflex: the limit surface is not convex "
                                          "there and the dual may have invalid faces");
   return result;
+}
+
+
+bool closedConvexUpload(const MeshSurface& surface) {
+  const TriMesh& m = surface.mesh();
+  const Eigen::Index nv = m.V.rows(), nf = m.F.rows();
+  // Closed (every edge in two triangles) and genus 0: V - E + F = V - F / 2 = 2.
+  if (!surface.isClosed() || nv - nf / 2 != 2 || nf % 2 != 0) return false;
+  const Vec3 centre = m.V.colwise().mean().transpose();
+  // Strictly convex: K > 0 at kConvexShare of the vertices. Where the surface flattens (a rounded box's sides
+  // and the cylinders between them) the Dupin conics stretch, and the geodesic's near-equilateral triangles
+  // give invalid stars (Props 4, 5): a rounded box at 1000 faces had 208.
+  Eigen::Index elliptic = 0;
+  for (Eigen::Index v = 0; v < nv; ++v) {
+    const LocalGeometry& g = surface.vertexGeometry(static_cast<int>(v));
+    if (!(g.normal.dot(g.point - centre) > 0)) return false;  // not seen outward from the centre: not convex
+    elliptic += g.gaussianCurvature() > 0;
+  }
+  return elliptic >= kConvexShare * nv;
+}
+
+Triangulation geodesicTriangulation(const MeshSurface& surface, int frequency) {
+  if (frequency < 1) throw Error(ErrorCode::InvalidParameter, "geodesic frequency must be at least 1");
+  const int n = frequency;
+  const TriMesh ico = icosahedronControl(1.0);
+  // Points of the geodesic sphere, shared along the icosahedron's edges and at its vertices: merged by
+  // their rounded position on the unit sphere.
+  std::vector<Vec3> points;
+  std::map<std::array<long long, 3>, int> id;
+  auto pointAt = [&](const Vec3& p) {
+    const Vec3 u = p.normalized();
+    const std::array<long long, 3> key = {std::llround(u.x() * 1e9), std::llround(u.y() * 1e9), std::llround(u.z() * 1e9)};
+    const auto it = id.find(key);
+    if (it != id.end()) return it->second;
+    points.push_back(u);
+    return id[key] = static_cast<int>(points.size()) - 1;
+  };
+  std::vector<Eigen::Vector3i> faces;
+  for (int f = 0; f < 20; ++f) {
+    const Vec3 a = ico.V.row(ico.F(f, 0)), b = ico.V.row(ico.F(f, 1)), c = ico.V.row(ico.F(f, 2));
+    auto at = [&](int i, int j) { return pointAt((double(n - i - j) * a + double(i) * b + double(j) * c) / n); };
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; i + j < n; ++j) {
+        faces.emplace_back(at(i, j), at(i + 1, j), at(i, j + 1));
+        if (i + j + 1 < n) faces.emplace_back(at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+      }
+  }
+  // The sphere onto an ellipsoid of the surface's principal axes and extents, then onto the surface.
+  const TriMesh& m = surface.mesh();
+  const Vec3 centre = m.V.colwise().mean().transpose();
+  const Eigen::MatrixXd centred = m.V.rowwise() - centre.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> pca(centred.transpose() * centred);
+  Eigen::Matrix3d axes = pca.eigenvectors();
+  if (axes.determinant() < 0) axes.col(0) = -axes.col(0);
+  const Eigen::MatrixXd local = centred * axes;
+  const Vec3 extent = local.cwiseAbs().colwise().maxCoeff().transpose();
+  Triangulation t;
+  t.mesh.V.resize(static_cast<Eigen::Index>(points.size()), 3);
+  double outward = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3 x = centre + axes * extent.cwiseProduct(points[i]);
+    const LocalGeometry g = surface.closestPoint(x);
+    t.mesh.V.row(static_cast<Eigen::Index>(i)) = g.point.transpose();
+    outward += g.normal.dot(g.point - centre);
+  }
+  // The icosahedron's faces are CCW seen from outside: turned where the surface's normals point inwards.
+  t.mesh.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    t.mesh.F.row(static_cast<Eigen::Index>(f)) = outward >= 0 ? faces[f].transpose() : Eigen::RowVector3i(faces[f](0), faces[f](2), faces[f](1));
+  t.notes.push_back("§7 on a closed convex upload: a geodesic icosahedron of frequency " + std::to_string(n) + " (" +
+                    std::to_string(points.size()) + " vertices, all of valence 6 but the icosahedron's 12 of "
+                    "valence 5, which become pentagons) mapped onto the surface by its principal axes");
+  return t;
 }
 
 }  // namespace phex

@@ -101,4 +101,16 @@ struct SubdivisionTriangulation {
 // and Error(InvalidParameter) when the surface would exceed kMaxSubdivisionTriangles.
 SubdivisionTriangulation subdivisionTriangulation(const TriMesh& control, int levels);
 
+// §7 for an uploaded closed convex surface, which comes as a fine triangle mesh rather than a control
+// polyhedron: whether `surface` is one (closed, genus 0, every vertex's normal pointing away from the centroid
+// of its vertices, and K > 0 at kConvexShare of them), and a triangulation of it from the icosahedron: each
+// face of the icosahedron cut into frequency^2 triangles and projected onto the unit sphere (a geodesic
+// sphere, 10 frequency^2 + 2 vertices, all of valence 6 but the icosahedron's 12 of valence 5), mapped onto
+// the surface by its principal axes and extents (an ellipsoid of the same size) and then to the closest
+// points. Its faces are CCW seen from the side the surface's normals point to. Throws Error(InvalidParameter)
+// for frequency < 1.
+constexpr double kConvexShare = 0.99;
+bool closedConvexUpload(const MeshSurface& surface);
+Triangulation geodesicTriangulation(const MeshSurface& surface, int frequency);
+
 }  // namespace phex
