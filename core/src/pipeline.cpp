@@ -643,7 +643,7 @@ constexpr int kCreaseEdges = 3;
 
 // What a noisy uploaded mesh (MeshSurface::noise), or one with a crease, does to the method, said in the notes
 // and in the errors of a lay that fails on it; empty for any other surface.
-std::string noiseNote(const Surface* surface) {
+std::string uploadNote(const Surface* surface) {
   const auto* mesh = dynamic_cast<const MeshSurface*>(surface);
   if (!mesh) return "";
   std::ostringstream s;
@@ -653,10 +653,12 @@ std::string noiseNote(const Surface* surface) {
     // the crease cannot be planar. A noisy mesh's sharp edges are its noise, said below instead.
     const MeshSurface::Creases& c = mesh->creases();
     if (c.edges < kCreaseEdges) return "";
+    std::ostringstream at;
+    at.precision(4);
+    at << "(" << c.at.x() << ", " << c.at.y() << ", " << c.at.z() << ")";
     s << "the uploaded mesh has a crease: " << c.edges << " edges where its triangles turn by more than "
-      << MeshSurface::kCreaseDegrees << " degrees, the sharpest by " << std::lround(c.degrees) << " near ("
-      << c.at.x() << ", " << c.at.y() << ", " << c.at.z()
-      << "); phex tiles smooth surfaces (§3: there is no tangent plane on a crease), and a panel across it "
+      << MeshSurface::kCreaseDegrees << " degrees, the sharpest by " << std::lround(c.degrees) << " near " << at.str()
+      << "; phex tiles smooth surfaces (§3: there is no tangent plane on a crease), and a panel across it "
          "cannot be planar: tile the parts on either side as meshes of their own, or round the crease off";
     return s.str();
   }
@@ -678,9 +680,9 @@ TriangulationStage triangulateLocal(const PipelineParams& given, const ProgressF
   try {
     return triangulateOn(given, progress, cancel, surface, origin);
   } catch (const Error& e) {
-    const std::string noise = noiseNote(surface.get());
-    if (e.code() != ErrorCode::CannotTile || noise.empty()) throw Error(e.code(), inFileFrame(e.what(), origin));
-    throw Error(ErrorCode::CannotTile, inFileFrame(std::string(e.what()) + " (" + noise + ")", origin));
+    const std::string note = uploadNote(surface.get());
+    if (e.code() != ErrorCode::CannotTile || note.empty()) throw Error(e.code(), inFileFrame(e.what(), origin));
+    throw Error(ErrorCode::CannotTile, inFileFrame(std::string(e.what()) + " (" + note + ")", origin));
   }
 }
 
@@ -704,7 +706,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
   t.method = params.method;
   if (params.method == TriangulationMethod::Progressive || params.method == TriangulationMethod::Prespecified)
     t.field = params.field;
-  std::string developableNote;
+  std::string surfaceNote;
   auto checkCell = [&](const Surface& surface) {
     const double cell = params.cell > 0 ? params.cell : cellForFaceCount(surface, params.faces);
     const double expected = facesAtCell(surface, cell);
@@ -734,7 +736,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     // which Method 2 along the principal field does (100 %, planar as laid).
     if (params.method == TriangulationMethod::Progressive && params.field == "principal" && isDevelopable(*t.surface)) {
       params.method = t.method = TriangulationMethod::Prespecified;
-      developableNote =
+      surfaceNote =
           "progressive conjugation (Method 1) has no ideal triangles on a developable (K = 0 everywhere, §5.3): "
           "laid along its rulings by Method 2 (pre-specified conjugation, principal field) instead";
     }
@@ -746,7 +748,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     if (const auto* mesh = dynamic_cast<const MeshSurface*>(t.surface.get());
         mesh && mesh->planar() && params.method == TriangulationMethod::Prespecified && params.field == "principal") {
       params.field = t.field = "section";
-      developableNote = "the uploaded mesh is a plane (no curvature over 1e-6 of its diagonal's inverse anywhere): "
+      surfaceNote = "the uploaded mesh is a plane (no curvature over 1e-6 of its diagonal's inverse anywhere): "
                         "every hexagon tiling of it is planar (§3), and its principal directions are undefined; "
                         "laid in straight rows along plane sections (field section) instead";
     }
@@ -923,8 +925,8 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       t.triangulation.notes.push_back(s.str());
     }
   }
-  if (const std::string noise = noiseNote(t.surface.get()); !noise.empty()) t.triangulation.notes.push_back(noise);
-  if (!developableNote.empty()) t.triangulation.notes.insert(t.triangulation.notes.begin(), developableNote);
+  if (const std::string note = uploadNote(t.surface.get()); !note.empty()) t.triangulation.notes.push_back(note);
+  if (!surfaceNote.empty()) t.triangulation.notes.insert(t.triangulation.notes.begin(), surfaceNote);
   if (const auto* mesh = dynamic_cast<const MeshSurface*>(t.surface.get()); mesh && mesh->developable())
     t.triangulation.notes.push_back(
         "the uploaded mesh is a developable (one principal curvature under 1 % of the other nearly everywhere): "
