@@ -876,6 +876,9 @@ bool MeshSurface::searchGrid(const Vec3& p, double& best, int& triangle, Vec3& b
     const std::size_t c = cellId(centre[0], centre[1], centre[2]);
     const int begin = cellStart_[c], end = cellStart_[c + 1];
     if (begin == end) return false;  // an empty cell: far from the mesh, the tree
+    // A cell crowded with small triangles (a mesh graded finely in one corner: cells are sized by the mean
+    // edge) is searched faster by the tree, whose answer is the same.
+    if (end - begin > kCrowdedCell) return false;
     int first = cellTriangles_[begin];
     double nearest = std::numeric_limits<double>::infinity();
     for (int e = begin; e < end; ++e) {

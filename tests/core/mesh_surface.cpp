@@ -375,13 +375,14 @@ TEST_CASE("mesh_surface: the closest point is the nearest over all triangles, ne
   const ParametricSurfacePtr torus = makeSurface("torus");
   // A fine torus, a coarse one (points far inside the cells) and a sheet with triangles of very unequal sizes.
   std::vector<TriMesh> meshes = {sample(*torus, 120, 40, 0.3).mesh, sample(*torus, 12, 5, 0.2).mesh};
-  {
+  // The second sheet crowds hundreds of triangles into the grid cells near x = 0 (searched by the tree:
+  // MeshSurface::kCrowdedCell).
+  for (const auto& [n, power] : {std::pair<int, double>{30, 3.0}, std::pair<int, double>{60, 5.0}}) {
     TriMesh sheet;
-    const int n = 30;
     sheet.V.resize((n + 1) * (n + 1), 3);
     for (int i = 0; i <= n; ++i)
       for (int j = 0; j <= n; ++j) {
-        const double x = std::pow(double(i) / n, 3), y = double(j) / n;  // columns crowded near x = 0
+        const double x = std::pow(double(i) / n, power), y = double(j) / n;  // columns crowded near x = 0
         sheet.V.row(i * (n + 1) + j) << x, y, 0.2 * std::sin(3 * x + 2 * y) + 0.01 * noise(i * 97 + j, 3);
       }
     sheet.F.resize(2 * n * n, 3);

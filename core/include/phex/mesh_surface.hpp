@@ -28,6 +28,7 @@ namespace phex {
 class MeshSurface : public Surface {
  public:
   static constexpr int kMinJetPoints = 16;
+  static constexpr int kCrowdedCell = 64;
   // Median fit residual, relative to the mean edge, above which a mesh counts as noisy. Meshes sampled from
   // smooth surfaces stay under 1e-4 (lattices of the analytic surfaces, jittered or graded grids of height
   // fields, coarse ones); heights jittered by 12 % of an edge give 0.04.
@@ -102,7 +103,8 @@ class MeshSurface : public Surface {
   // Lowers `best` (a squared distance) to the nearest triangle's, setting `triangle` and `barycentric`.
   void searchTree(const Vec3& p, double& best, int& triangle, Vec3& barycentric) const;
   // The same through the grid; false when the shells searched cannot prove the nearest (then `best` is
-  // still an upper bound, reached by `triangle`).
+  // still an upper bound, reached by `triangle`), or when the point's cell holds more than kCrowdedCell
+  // triangles (then the tree is faster).
   bool searchGrid(const Vec3& p, double& best, int& triangle, Vec3& barycentric) const;
 
   TriMesh mesh_;
