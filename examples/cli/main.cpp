@@ -39,9 +39,10 @@ Options of `phex run`:
                             --method subdivision, the convex control mesh
   --param NAME=VALUE        a surface parameter, e.g. --param R=2 (repeatable)
   --method NAME             triangulation: auto (default: the surface's recommended method, see
-                            `phex surfaces`; prespecified for uploaded meshes), progressive (§5.2
-                            Method 1), prespecified (Method 2, along --field), subdivision (§7, closed
-                            convex surfaces) or lattice (parameter rows; analytic surfaces only)
+                            `phex surfaces`; prespecified for uploaded meshes, §7's geodesic route
+                            for a closed convex one), progressive (§5.2 Method 1), prespecified
+                            (Method 2, along --field), subdivision (§7, closed convex surfaces) or
+                            lattice (parameter rows; analytic surfaces only)
   --field SPEC              direction field: principal (default; under --method auto the surface's
                             recommended field; on a dome whose curvature lines turn around an umbilic,
                             section), angle:DEG, param, radial, diverging[:DEG], spiral[:DEG],
