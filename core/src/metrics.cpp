@@ -1,5 +1,3 @@
-#include <cstdio>
-#include <cstdlib>
 #include "phex/metrics.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -236,7 +234,6 @@ MeshMetrics measureAll(const PolyMesh& mesh, const Surface* surface) {
       const Vec3 p = mesh.vertex(v);
       const LocalGeometry g = surface->closestPoint(p);
       m.surfaceDistance[v] = (g.point - p).norm() / diagonal;
-      if (getenv("PHEX_T") && m.surfaceDistance[v] > 2e-3) fprintf(stderr, "far v%d (%g %g %g) foot (%g %g %g) d %g\n", int(v), p.x(), p.y(), p.z(), g.point.x(), g.point.y(), g.point.z(), m.surfaceDistance[v]);
       m.surfaceDistanceMax = std::max(m.surfaceDistanceMax, m.surfaceDistance[v]);
       distanceSum += m.surfaceDistance[v];
       const double K = g.gaussianCurvature();
