@@ -9,6 +9,7 @@
 #include <cstring>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <sstream>
 
 #include "phex/direction_field.hpp"
@@ -707,6 +708,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
   if (params.method == TriangulationMethod::Progressive || params.method == TriangulationMethod::Prespecified)
     t.field = params.field;
   std::string surfaceNote;
+  std::optional<TriangulationCheck> checked;  // of a triangulation checked on the way (the geodesic route)
   auto checkCell = [&](const Surface& surface) {
     const double cell = params.cell > 0 ? params.cell : cellForFaceCount(surface, params.faces);
     const double expected = facesAtCell(surface, cell);
@@ -759,20 +761,21 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     // icosahedron mapped onto it gives valence 6 everywhere but at 12 vertices (its pentagons).
     // Kept only where it leaves no more invalid stars than a hundredth of its vertices (else laid as below).
     const auto* closedMesh = dynamic_cast<const MeshSurface*>(t.surface.get());
-    bool geodesic = given.method == TriangulationMethod::Auto && closedMesh && closedConvexUpload(*closedMesh);
-    if (geodesic) {
+    if (given.method == TriangulationMethod::Auto && closedMesh && closedConvexUpload(*closedMesh)) {
       const double faces = params.cell > 0 ? facesAtCell(*t.surface, cell) : double(params.faces);
       const int frequency = std::max(1, static_cast<int>(std::lround(std::sqrt(std::max(faces - 2, 10.0) / 10))));
       Triangulation g = geodesicTriangulation(*closedMesh, frequency);
       repairStars(g, *t.surface);
-      geodesic = checkTriangulation(g, *t.surface).invalidStars.size() <= 0.01 * double(g.mesh.V.rows());
-      if (geodesic) {
+      TriangulationCheck check = checkTriangulation(g, *t.surface);
+      if (check.invalidStars.size() <= 0.01 * double(g.mesh.V.rows())) {
         params.method = t.method = TriangulationMethod::Subdivision;
         t.field.clear();
         t.triangulation = std::move(g);
+        checked = std::move(check);
       }
     }
-    if (geodesic) {
+    if (checked) {
+      // Laid above, by the geodesic route.
     } else if (params.method == TriangulationMethod::Lattice) {
       t.triangulation = latticeTriangulation(dynamic_cast<const ParametricSurface&>(*t.surface), cell);
       repairStars(t.triangulation, *t.surface);
@@ -895,7 +898,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       if (!startNote.empty()) t.triangulation.notes.insert(t.triangulation.notes.begin(), startNote);
     }
   }
-  t.check = checkTriangulation(t.triangulation, *t.surface);
+  t.check = checked ? std::move(*checked) : checkTriangulation(t.triangulation, *t.surface);
   // A lay that covers next to nothing is no result to hand on (a hill laid from a tiny loop around its top:
   // 11 faces for 5000 asked, before further systems were seeded from there).
   if (t.check.coverage >= 0 && t.check.coverage < kMinCoverage)
