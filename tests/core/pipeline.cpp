@@ -52,16 +52,18 @@ PipelineParams progressiveCyclidePatch(double vSpan, int faces) {
   return p;
 }
 
-// A height field z(x, y) over [-1, 1]^2 as uploaded OBJ bytes: an n x n grid, each square cut along one diagonal,
-// of the triangles whose centroid `keep` accepts (all by default; a hole where it does not).
-template <typename Height, typename Keep = bool (*)(double, double)>
-MeshInput heightFieldUpload(const std::string& name, int n, Height z, Keep keep = [](double, double) { return true; }) {
+// A grid over [-1, 1]^2 as uploaded OBJ bytes ("name.obj"): an n x n grid whose vertex at (x, y) is placed at
+// point(x, y), each square cut along one diagonal, of the triangles whose centroid (in x, y) `keep` accepts
+// (all by default; a hole where it does not); coordinates written with `digits` significant digits.
+template <typename Point, typename Keep = bool (*)(double, double)>
+MeshInput gridUpload(const std::string& name, int n, Point point, Keep keep = [](double, double) { return true; },
+                     int digits = 12) {
   std::ostringstream obj;
-  obj.precision(12);
+  obj.precision(digits);
   for (int j = 0; j <= n; ++j)
     for (int i = 0; i <= n; ++i) {
-      const double x = -1 + 2.0 * i / n, y = -1 + 2.0 * j / n;
-      obj << "v " << x << ' ' << y << ' ' << z(x, y) << '\n';
+      const Vec3 p = point(-1 + 2.0 * i / n, -1 + 2.0 * j / n);
+      obj << "v " << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
     }
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
@@ -72,6 +74,12 @@ MeshInput heightFieldUpload(const std::string& name, int n, Height z, Keep keep 
     }
   const std::string text = obj.str();
   return MeshInput{std::vector<std::uint8_t>(text.begin(), text.end()), "obj", name + ".obj"};
+}
+
+// A height field z(x, y) over [-1, 1]^2 as uploaded OBJ bytes (gridUpload).
+template <typename Height, typename Keep = bool (*)(double, double)>
+MeshInput heightFieldUpload(const std::string& name, int n, Height z, Keep keep = [](double, double) { return true; }) {
+  return gridUpload(name, n, [&](double x, double y) { return Vec3(x, y, z(x, y)); }, keep);
 }
 
 }  // namespace
@@ -865,22 +873,12 @@ TEST_CASE("pipeline: an upload with a crease says where it is, and a smooth or m
   // A smooth vault, and the same with vertices pushed past their neighbours in the plan (a broken grid, not a
   // ridge): its triangles fold back over each other, turning by nearly 180 degrees. No crease either way.
   for (const bool folded : {false, true}) {
-    std::ostringstream obj;
     const int n = 60;
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) {
-        double x = -1 + 2.0 * i / n;
-        const double y = -1 + 2.0 * j / n;
-        if (folded && j % 10 == 5 && i % 10 == 5) x += 1.6 * 2.0 / n;
-        obj << "v " << x << ' ' << y << ' ' << 0.5 - 0.3 * y * y << '\n';
-      }
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 2, d = a + n + 1;
-        obj << "f " << a << ' ' << b << ' ' << c << "\nf " << a << ' ' << c << ' ' << d << '\n';
-      }
-    const std::string text = obj.str();
-    p.mesh = MeshInput{std::vector<std::uint8_t>(text.begin(), text.end()), "obj", "vault.obj"};
+    p.mesh = gridUpload("vault", n, [&](double x, double y) {
+      const long i = std::lround((x + 1) * n / 2), j = std::lround((y + 1) * n / 2);
+      if (folded && j % 10 == 5 && i % 10 == 5) x += 1.6 * 2.0 / n;
+      return Vec3(x, y, 0.5 - 0.3 * y * y);
+    });
     const MeshSurface surface(readMeshBytes(p.mesh->bytes.data(), p.mesh->bytes.size(), "obj", "vault.obj"));
     CHECK(surface.creases().edges == 0);
     const std::string smooth = allNotes(triangulate(p).triangulation);
@@ -970,21 +968,8 @@ TEST_CASE("pipeline: an upload in site coordinates, far from the origin, is tile
   // at the origin. It is computed about the centre of its box now, and comes back in the file's coordinates.
   const Vec3 site(512345.678, 5432109.876, 250.0);
   auto upload = [&](const Vec3& shift, double scale) {
-    std::ostringstream obj;
-    obj.precision(17);
-    const int n = 80;
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) {
-        const double x = -1 + 2.0 * i / n, y = -1 + 2.0 * j / n;
-        obj << "v " << scale * x + shift.x() << ' ' << scale * y + shift.y() << ' ' << scale * 0.3 * (x * x - y * y) + shift.z() << '\n';
-      }
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 2, d = a + n + 1;
-        obj << "f " << a << ' ' << b << ' ' << c << "\nf " << a << ' ' << c << ' ' << d << '\n';
-      }
-    const std::string text = obj.str();
-    return MeshInput{std::vector<std::uint8_t>(text.begin(), text.end()), "obj", "roof.obj"};
+    return gridUpload("roof", 80, [&](double x, double y) { return Vec3(scale * Vec3(x, y, 0.3 * (x * x - y * y)) + shift); },
+                      [](double, double) { return true; }, 17);
   };
   PipelineParams p;
   p.faces = 4000;
