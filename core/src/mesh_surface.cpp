@@ -291,6 +291,10 @@ struct JetFit {
   Vec3 normal;
   Eigen::Matrix3d tensor;
   double residual = 0;  // root mean square of the points' heights off the fitted jet
+  // The jet itself: z = sum coefficient[i] * monomial_i(x * scale, y * scale) / scale over `terms` monomials.
+  double coefficient[10] = {0};
+  double scale = 0;
+  int terms = 0;
 };
 
 // Fits z = sum c_ij x^i y^j (i + j <= 3, or 2) to `local` (x, y, z in the frame whose third axis is the
@@ -353,6 +357,9 @@ JetFit fitJet(const std::vector<Vec3>& local) {
     squares += r * r;
   }
   fit.residual = std::sqrt(squares / n);
+  for (int i = 0; i < m; ++i) fit.coefficient[i] = c[i];
+  fit.scale = scale;
+  fit.terms = m;
   // Back to unscaled derivatives at the origin: f_x = c1, f_xx = 2 c3 s, ... (z was scaled too).
   const double fx = c[1], fy = c[2], fxx = 2 * c[3] * scale, fxy = c[4] * scale, fyy = 2 * c[5] * scale;
   // G = J^T J = I + g g^T with g = (fx, fy), det G = 1 + |g|^2; M = G^-1 B G^-1; tensor = J M J^T.
@@ -511,7 +518,7 @@ void MeshSurface::buildTopology() {
   }
 }
 
-double MeshSurface::estimateCurvature(int minRings) {
+std::vector<Vec3> MeshSurface::trialNormals() const {
   const int nv = vertexCount(), nf = static_cast<int>(mesh_.F.rows());
   // Area-weighted normals: the trial frame of each fit, oriented like the triangles.
   std::vector<Vec3> trialNormal(nv, Vec3::Zero());
@@ -520,56 +527,168 @@ double MeshSurface::estimateCurvature(int minRings) {
     const Vec3 n = (b - a).cross(c - a);
     for (int k = 0; k < 3; ++k) trialNormal[mesh_.F(f, k)] += n;
   }
+  return trialNormal;
+}
+
+MeshSurface::VertexFit MeshSurface::fitVertex(int v, int minRings, const Vec3& trialNormal, FitScratch& scratch) const {
+  // The smallest k-ring, k >= 2, with enough points for a cubic jet (capped for safety).
+  scratch.patch.assign(1, v);
+  scratch.stamp[v] = v;
+  std::size_t ringBegin = 0;
+  for (int rings = 1; rings <= 8; ++rings) {
+    const std::size_t ringEnd = scratch.patch.size();
+    for (std::size_t i = ringBegin; i < ringEnd; ++i)
+      for (int j = neighbourStart_[scratch.patch[i]]; j < neighbourStart_[scratch.patch[i] + 1]; ++j) {
+        const int w = neighbours_[j];
+        if (scratch.stamp[w] != v) scratch.stamp[w] = v, scratch.patch.push_back(w);
+      }
+    ringBegin = ringEnd;
+    if (scratch.patch.size() == ringEnd || (rings >= minRings && static_cast<int>(scratch.patch.size()) >= kMinJetPoints)) break;
+  }
+  const Vec3 p = mesh_.V.row(v);
+  Vec3 normal = norm(trialNormal) > 0 ? normalized(trialNormal) : Vec3::UnitZ();
+  VertexFit out;
+  Eigen::Matrix3d& tensor = out.tensor;
+  tensor.setZero();
+  // Two passes at most: a fit whose normal is far from the trial normal is refitted in its own frame.
+  for (int pass = 0; pass < 2; ++pass) {
+    const Vec3 t1 = unitOrthogonal(normal), t2 = normal.cross(t1);
+    scratch.local.clear();
+    for (int w : scratch.patch) {
+      const Vec3 d = Vec3(mesh_.V.row(w)) - p;
+      scratch.local.emplace_back(dot(d, t1), dot(d, t2), dot(d, normal));
+    }
+    JetFit fit = fitJet<10>(scratch.local);
+    if (!fit.ok) fit = fitJet<6>(scratch.local);
+    if (!fit.ok) break;  // too few points (a tiny mesh): keep the trial normal, zero curvature
+    out.residual = fit.residual;
+    std::copy(fit.coefficient, fit.coefficient + 10, out.coefficient);
+    out.scale = fit.scale;
+    out.terms = fit.terms;
+    out.frame << t1, t2, normal;
+    Eigen::Matrix3d R;
+    R << t1, t2, normal;
+    // tensor = R fit.tensor R^T, fitted = R fit.normal, summed in a fixed order.
+    Eigen::Matrix3d RT;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) RT(i, j) = R(i, 0) * fit.tensor(0, j) + R(i, 1) * fit.tensor(1, j) + R(i, 2) * fit.tensor(2, j);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) tensor(i, j) = RT(i, 0) * R(j, 0) + RT(i, 1) * R(j, 1) + RT(i, 2) * R(j, 2);
+    const Vec3 fitted = times(R, fit.normal);
+    const bool refit = dot(fitted, normal) < 0.995;  // about 6 degrees
+    normal = fitted;
+    if (!refit) break;
+  }
+  out.normal = normal;
+  return out;
+}
+
+TriMesh MeshSurface::refined(int k) const {
+  const int nv = vertexCount(), nf = static_cast<int>(mesh_.F.rows());
+  if (k < 1) throw Error(ErrorCode::InvalidParameter, "refinement level must be at least 1");
+  if (double(nf) * k * k > double(kMaxRefinedTriangles))
+    throw Error(ErrorCode::InvalidParameter, "refining " + std::to_string(nf) + " triangles " + std::to_string(k) + " x " +
+                                                 std::to_string(k) + " would exceed " +
+                                                 std::to_string(kMaxRefinedTriangles) + " triangles");
+  const std::vector<Vec3> trial = trialNormals();
+  FitScratch scratch(nv);
+  std::vector<VertexFit> jets(nv);
+  for (int v = 0; v < nv; ++v) jets[v] = fitVertex(v, curvatureRings_, trial[v], scratch);
+  // x projected onto vertex v's jet (through the vertex: its constant term left out).
+  auto onJet = [&](int v, const Vec3& x) -> Vec3 {
+    const VertexFit& j = jets[v];
+    if (j.terms == 0) return x;
+    const Vec3 p = mesh_.V.row(v).transpose(), d = x - p;
+    const Vec3 t1 = j.frame.col(0), t2 = j.frame.col(1), n = j.frame.col(2);
+    const double u = dot(d, t1), w = dot(d, t2);
+    double row[10];
+    jetMonomials(u * j.scale, w * j.scale, row);
+    double z = 0;
+    for (int i = 1; i < j.terms; ++i) z += j.coefficient[i] * row[i];
+    return p + u * t1 + w * t2 + (z / j.scale) * n;
+  };
+  auto blend = [&](const int ids[3], const double b[3]) {
+    Vec3 x = Vec3::Zero();
+    for (int c = 0; c < 3; ++c) x += b[c] * mesh_.V.row(ids[c]).transpose();
+    Vec3 q = Vec3::Zero();
+    for (int c = 0; c < 3; ++c)
+      if (b[c] > 0) q += b[c] * onJet(ids[c], x);
+    return q;
+  };
+  // Every edge's k - 1 inner points, from its lower vertex id to its higher.
+  std::vector<std::array<int, 3>> edges;  // (low, high, first point id)
+  edges.reserve(3 * static_cast<std::size_t>(nf));
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = mesh_.F(f, c), b = mesh_.F(f, (c + 1) % 3);
+      edges.push_back({std::min(a, b), std::max(a, b), 0});
+    }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end(),
+                          [](const std::array<int, 3>& x, const std::array<int, 3>& y) { return x[0] == y[0] && x[1] == y[1]; }),
+              edges.end());
+  const std::size_t inner = static_cast<std::size_t>(k - 1) * (k - 2) / 2;
+  TriMesh out;
+  out.V.resize(nv + static_cast<Eigen::Index>(edges.size()) * (k - 1) + static_cast<Eigen::Index>(nf * inner), 3);
+  out.V.topRows(nv) = mesh_.V;
+  Eigen::Index next = nv;
+  for (auto& e : edges) {
+    e[2] = static_cast<int>(next);
+    const int ids[3] = {e[0], e[1], e[0]};
+    for (int i = 1; i < k; ++i) {
+      const double b[3] = {double(k - i) / k, double(i) / k, 0.0};
+      out.V.row(next++) = blend(ids, b).transpose();
+    }
+  }
+  auto edgePoint = [&](int a, int b, int i) {  // the point i / k of the way from a to b (0 < i < k)
+    const auto it = std::lower_bound(edges.begin(), edges.end(), std::array<int, 3>{std::min(a, b), std::max(a, b), 0},
+                                     [](const std::array<int, 3>& x, const std::array<int, 3>& y) {
+                                       return x[0] != y[0] ? x[0] < y[0] : x[1] < y[1];
+                                     });
+    return (*it)[2] + (a < b ? i : k - i) - 1;
+  };
+  out.F.resize(static_cast<Eigen::Index>(nf) * k * k, 3);
+  Eigen::Index t = 0;
+  std::vector<int> lattice(static_cast<std::size_t>(k + 1) * (k + 1));
+  for (int f = 0; f < nf; ++f) {
+    const int ids[3] = {mesh_.F(f, 0), mesh_.F(f, 1), mesh_.F(f, 2)};
+    // Point (i, j): a + i / k (b - a) + j / k (c - a).
+    auto at = [&](int i, int j) -> int& { return lattice[static_cast<std::size_t>(j) * (k + 1) + i]; };
+    for (int j = 0; j <= k; ++j)
+      for (int i = 0; i + j <= k; ++i) {
+        if (i == 0 && j == 0) at(i, j) = ids[0];
+        else if (i == k) at(i, j) = ids[1];
+        else if (j == k) at(i, j) = ids[2];
+        else if (j == 0) at(i, j) = edgePoint(ids[0], ids[1], i);
+        else if (i == 0) at(i, j) = edgePoint(ids[0], ids[2], j);
+        else if (i + j == k) at(i, j) = edgePoint(ids[1], ids[2], j);
+        else {
+          const double b[3] = {double(k - i - j) / k, double(i) / k, double(j) / k};
+          out.V.row(next) = blend(ids, b).transpose();
+          at(i, j) = static_cast<int>(next++);
+        }
+      }
+    for (int j = 0; j < k; ++j)
+      for (int i = 0; i + j < k; ++i) {
+        out.F.row(t++) << at(i, j), at(i + 1, j), at(i, j + 1);
+        if (i + j + 1 < k) out.F.row(t++) << at(i + 1, j), at(i + 1, j + 1), at(i, j + 1);
+      }
+  }
+  return out;
+}
+
+double MeshSurface::estimateCurvature(int minRings) {
+  const int nv = vertexCount();
+  const std::vector<Vec3> trialNormal = trialNormals();
   vertexGeometry_.resize(nv);
   shapeTensor_.resize(nv);
-  std::vector<int> stamp(nv, -1), patch;
-  std::vector<Vec3> local;
+  FitScratch scratch(nv);
   std::vector<double> residual(nv, 0.0);
   for (int v = 0; v < nv; ++v) {
-    // The smallest k-ring, k >= 2, with enough points for a cubic jet (capped for safety).
-    patch.assign(1, v);
-    stamp[v] = v;
-    std::size_t ringBegin = 0;
-    for (int rings = 1; rings <= 8; ++rings) {
-      const std::size_t ringEnd = patch.size();
-      for (std::size_t i = ringBegin; i < ringEnd; ++i)
-        for (int j = neighbourStart_[patch[i]]; j < neighbourStart_[patch[i] + 1]; ++j) {
-          const int w = neighbours_[j];
-          if (stamp[w] != v) stamp[w] = v, patch.push_back(w);
-        }
-      ringBegin = ringEnd;
-      if (patch.size() == ringEnd || (rings >= minRings && static_cast<int>(patch.size()) >= kMinJetPoints)) break;
-    }
-    const Vec3 p = mesh_.V.row(v);
-    Vec3 normal = norm(trialNormal[v]) > 0 ? normalized(trialNormal[v]) : Vec3::UnitZ();
-    Eigen::Matrix3d tensor = Eigen::Matrix3d::Zero();
-    // Two passes at most: a fit whose normal is far from the trial normal is refitted in its own frame.
-    for (int pass = 0; pass < 2; ++pass) {
-      const Vec3 t1 = unitOrthogonal(normal), t2 = normal.cross(t1);
-      local.clear();
-      for (int w : patch) {
-        const Vec3 d = Vec3(mesh_.V.row(w)) - p;
-        local.emplace_back(dot(d, t1), dot(d, t2), dot(d, normal));
-      }
-      JetFit fit = fitJet<10>(local);
-      if (!fit.ok) fit = fitJet<6>(local);
-      if (!fit.ok) break;  // too few points (a tiny mesh): keep the trial normal, zero curvature
-      residual[v] = fit.residual;
-      Eigen::Matrix3d R;
-      R << t1, t2, normal;
-      // tensor = R fit.tensor R^T, fitted = R fit.normal, summed in a fixed order.
-      Eigen::Matrix3d RT;
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) RT(i, j) = R(i, 0) * fit.tensor(0, j) + R(i, 1) * fit.tensor(1, j) + R(i, 2) * fit.tensor(2, j);
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) tensor(i, j) = RT(i, 0) * R(j, 0) + RT(i, 1) * R(j, 1) + RT(i, 2) * R(j, 2);
-      const Vec3 fitted = times(R, fit.normal);
-      const bool refit = dot(fitted, normal) < 0.995;  // about 6 degrees
-      normal = fitted;
-      if (!refit) break;
-    }
-    shapeTensor_[v] = tensor;
-    vertexGeometry_[v] = principalFrame(p, normal, tensor);
+    const VertexFit fit = fitVertex(v, minRings, trialNormal[v], scratch);
+    residual[v] = fit.residual;
+    shapeTensor_[v] = fit.tensor;
+    vertexGeometry_[v] = principalFrame(mesh_.V.row(v).transpose(), fit.normal, fit.tensor);
   }
   if (nv == 0) return 0;
   std::nth_element(residual.begin(), residual.begin() + nv / 2, residual.end());

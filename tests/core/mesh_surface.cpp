@@ -492,3 +492,69 @@ TEST_CASE("mesh_surface: a developable's planar points take the direction of the
     }
   CHECK(checked == 41 * 7);
 }
+
+namespace {
+// An n x n grid of z = height(x, y) over [-1, 1]^2, each square cut along one diagonal.
+template <typename Height>
+TriMesh heightGrid(int n, Height height) {
+  TriMesh m;
+  m.V.resize((n + 1) * (n + 1), 3);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const double x = -1 + 2.0 * i / n, y = -1 + 2.0 * j / n;
+      m.V.row(j * (n + 1) + i) << x, y, height(x, y);
+    }
+  m.F.resize(2 * n * n, 3);
+  for (int j = 0, t = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      m.F.row(t++) << a, b, c;
+      m.F.row(t++) << a, c, d;
+    }
+  return m;
+}
+}  // namespace
+
+TEST_CASE("mesh_surface: a coarse mesh refined onto its vertices' cubic jets follows the smooth surface") {
+  // 8 x 8 grids of a dome and of a wave: the refined points lie on the sampled function several times closer
+  // than the facets do, the vertices stay where they were, and the refinement is a clean mesh of k^2 times the triangles.
+  const auto dome = [](double x, double y) { return 0.5 - 0.25 * (x * x + y * y); };
+  const auto wave = [](double x, double y) { return 0.25 * std::sin(2 * x) * std::cos(1.5 * y); };
+  for (int which = 0; which < 2; ++which) {
+    const auto height = [&](double x, double y) { return which == 0 ? dome(x, y) : wave(x, y); };
+    INFO((which == 0 ? "dome" : "wave"));
+    const TriMesh coarse = heightGrid(8, height);
+    const MeshSurface surface(coarse, "coarse");
+    constexpr int k = 4;
+    const TriMesh fine = surface.refined(k);
+    const Eigen::Index edges = 3 * 8 * 8 + 2 * 8;  // of an n x n grid cut along diagonals: 3 n^2 + 2 n
+    CHECK(fine.F.rows() == coarse.F.rows() * k * k);
+    CHECK(fine.V.rows() == coarse.V.rows() + edges * (k - 1) + coarse.F.rows() * (k - 1) * (k - 2) / 2);
+    CHECK(fine.V.topRows(coarse.V.rows()) == coarse.V);  // the vertices keep their ids and positions
+    const MeshSurface refined(fine, "refined");  // manifold, consistently oriented, one boundary loop
+    CHECK(refined.boundaryLoops().size() == 1);
+    // Off the function: the refined points against the facets' own points at the same places.
+    // Near the boundary the jets are fitted one-sided, and they are less accurate there.
+    double refinedOff = 0, refinedInside = 0, facetsOff = 0;
+    for (Eigen::Index v = coarse.V.rows(); v < fine.V.rows(); ++v) {
+      const Vec3 p = fine.V.row(v);
+      refinedOff = std::max(refinedOff, std::abs(p.z() - height(p.x(), p.y())));
+      if (std::max(std::abs(p.x()), std::abs(p.y())) < 0.75)
+        refinedInside = std::max(refinedInside, std::abs(p.z() - height(p.x(), p.y())));
+      const LocalGeometry facet = surface.closestPoint(Vec3(p.x(), p.y(), height(p.x(), p.y())));
+      facetsOff = std::max(facetsOff, std::abs(facet.point.z() - height(facet.point.x(), facet.point.y())));
+    }
+    INFO("refined " << refinedOff << " (inside " << refinedInside << "), facets " << facetsOff);
+    CHECK(refinedInside < 0.15 * facetsOff);  // dome 0.02, wave 0.12
+    CHECK(refinedOff < 0.25 * facetsOff);  // dome 0.03, wave 0.17
+    // Its curvature is the function's, where the facets' interpolated one is only near it at the vertices.
+    const LocalGeometry g = refined.closestPoint(Vec3(0.1, 0.05, height(0.1, 0.05)));
+    if (which == 0) {
+      CHECK(g.k1 == Approx(0.5).epsilon(0.08));  // z = 0.5 - r^2 / 4: both curvatures about 1/2 at the top
+      CHECK(g.k2 == Approx(0.5).epsilon(0.08));
+    }
+  }
+  const MeshSurface small(heightGrid(8, dome), "coarse");
+  CHECK_THROWS_AS(small.refined(0), Error);
+  CHECK_THROWS_AS(small.refined(200), Error);  // 128 x 200^2 triangles: over kMaxRefinedTriangles
+}

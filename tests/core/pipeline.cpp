@@ -887,6 +887,42 @@ TEST_CASE("pipeline: an upload with a crease says where it is, and a smooth or m
   }
 }
 
+TEST_CASE("pipeline: a coarse upload laid finer than its triangles is laid on a smooth surface through its vertices") {
+  // A dome sampled 8 x 8 (128 triangles, edges of 0.25) at 3000 faces (a cell of about 0.04): on its flat
+  // facets the solve stalled at 3.3e-3 (exit 2), and a 12 x 12 dome at 3000 faces ended 0.21 % of the diagonal
+  // off. Laid on the refined surface: planar, every interior face a hexagon, near the dome itself.
+  clearUploadCache();
+  const auto dome = [](double x, double y) { return 0.5 - 0.25 * (x * x + y * y); };
+  PipelineParams p;
+  p.mesh = heightFieldUpload("sketch", 8, dome);
+  p.faces = 3000;
+  const PipelineResult r = runPipeline(p);
+  const std::string notes = allNotes(r.triangulation);
+  INFO(notes);
+  CHECK(notes.find("the uploaded mesh is coarse for this lay") != std::string::npos);
+  CHECK(notes.find("split 14 x 14") != std::string::npos);  // triangles of 0.279 (triangleSize), a cell of 0.0407
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+  CHECK(r.interiorHexagonFraction >= 0.99);
+  CHECK(r.metrics.surfaceDistanceMax < 0.002);
+  const double diagonal = std::sqrt(2.0 * 2 * 2 + 0.5 * 0.5 * 0.25);
+  double offDome = 0;  // the P-Hex nodes against the function the sketch sampled
+  for (Eigen::Index v = 0; v < r.hex.V.rows(); ++v) {
+    const Vec3 x = r.hex.V.row(v);
+    if (std::max(std::abs(x.x()), std::abs(x.y())) < 1) offDome = std::max(offDome, std::abs(x.z() - dome(x.x(), x.y())));
+  }
+  CHECK(offDome < 0.002 * diagonal);
+  // The refined surface is kept with the upload: the same run again reuses both, to the bit.
+  const PipelineResult again = runPipeline(p);
+  CHECK(again.surfaceReused);
+  CHECK(again.hex.V == r.hex.V);
+  // A mesh as fine as the lay is laid as it is.
+  p.mesh = heightFieldUpload("survey", 60, dome);
+  CHECK(allNotes(triangulate(p).triangulation).find("coarse") == std::string::npos);
+  clearUploadCache();
+}
+
 // A closed ellipsoid with semi-axes a, b, c as an uploaded OBJ: nu meridians, nv - 1 parallels and two poles.
 MeshInput closedEllipsoidUpload(int nu, int nv, double a, double b, double c) {
   std::ostringstream obj;

@@ -85,6 +85,18 @@ class MeshSurface : public Surface {
   static constexpr double kCreaseDegrees = 30.0, kFoldDegrees = 150.0;
   const Creases& creases() const { return creases_; }
 
+  // The mesh refined into a smooth surface through its vertices: each triangle split into k x k, the new
+  // points on the blend, by their barycentric coordinates, of their projections onto the cubic jets fitted
+  // around the triangle's three corners (the very fits its curvature comes from, shifted to pass through
+  // their vertex). Like Phong tessellation with the corners' tangent planes replaced by their cubic jets:
+  // the blend passes through every vertex, is continuous across edges (an edge's points depend on its two
+  // ends alone), and its curvature is the jets' where Phong's kinks at every edge. A corner without a jet
+  // (a tiny mesh) adds its linear interpolation instead. The vertices keep their ids (0 .. #V-1), then come
+  // the edges' points, then the triangles' inner points; triangles keep their orientation.
+  // Throws Error(InvalidParameter) for k < 1 or a result over kMaxRefinedTriangles.
+  TriMesh refined(int k) const;
+  static constexpr std::size_t kMaxRefinedTriangles = std::size_t(1) << 20;  // 1,048,576
+
  private:
   struct Node {
     Box3 box;
@@ -96,6 +108,22 @@ class MeshSurface : public Surface {
   Creases creases_;
   // Fits every vertex's jet over at least `rings` rings; returns the median fit residual.
   double estimateCurvature(int rings);
+  // One vertex's fit: its shape tensor and normal, and the jet z(x, y) in `frame` (columns: x, y and the
+  // trial normal z it was fitted along) as sum coefficient[i] * monomial_i(x * scale, y * scale) / scale over
+  // `terms` monomials (0: no jet could be fitted).
+  struct VertexFit {
+    Eigen::Matrix3d tensor = Eigen::Matrix3d::Zero(), frame = Eigen::Matrix3d::Identity();
+    Vec3 normal = Vec3::UnitZ();
+    double residual = 0, scale = 0, coefficient[10] = {0};
+    int terms = 0;
+  };
+  struct FitScratch {
+    explicit FitScratch(int vertices) : stamp(vertices, -1) {}
+    std::vector<int> stamp, patch;
+    std::vector<Vec3> local;
+  };
+  std::vector<Vec3> trialNormals() const;
+  VertexFit fitVertex(int v, int minRings, const Vec3& trialNormal, FitScratch& scratch) const;
   void buildTree();
   void buildGrid();
   // Squared distance from p to triangle f, and the barycentric coordinates of the nearest point on it.
