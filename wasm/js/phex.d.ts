@@ -220,7 +220,8 @@ export interface Result {
   /** The direction field the conjugate methods laid along ('auto' resolved); '' for lattice and subdivision. */
   field: string;
   /** The uploaded mesh's surface (its estimated curvature and search structures) came from the previous run or
-   * preview on the same upload: see {@link PHex.clearUploadCache}. Always false for analytic surfaces. */
+   * preview on the same upload: see {@link PHex.clearUploadCache}. Always false for analytic surfaces. A coarse
+   * upload laid finer than its triangles is laid on its smooth refinement (a note says so), kept with it. */
   surfaceReused: boolean;
   /** An upload far from the origin (more than ten times its size: site coordinates) is computed about the
    * centre of its box, this point, where its coordinates keep their digits; every mesh and note here is in the
