@@ -40,7 +40,8 @@ Options of `phex run`:
   --param NAME=VALUE        a surface parameter, e.g. --param R=2 (repeatable)
   --method NAME             triangulation: auto (default: the surface's recommended method, see
                             `phex surfaces`; prespecified for uploaded meshes, §7's geodesic route
-                            for a closed convex one), progressive (§5.2 Method 1), prespecified
+                            for a closed convex one, subdivision for a closed convex polyhedron of
+                            fewer vertices than the faces asked for), progressive (§5.2 Method 1), prespecified
                             (Method 2, along --field), subdivision (§7, closed convex surfaces) or
                             lattice (parameter rows; analytic surfaces only)
   --field SPEC              direction field: principal (default; under --method auto the surface's

@@ -310,7 +310,7 @@ export interface RunParams {
   splitBoundary?: 'on' | 'off';
   /**
    * Triangulation method: 'auto' (default: the surface's recommended method, `SurfaceSpec.method`;
-   * 'prespecified' for uploaded meshes, §7's geodesic route for a closed convex one), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
+   * 'prespecified' for uploaded meshes, §7's geodesic route for a closed convex one, 'subdivision' for a closed convex polyhedron of fewer vertices than the faces asked for), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
    * conjugation along `field` (Method 2), 'subdivision' (Loop subdivision of a convex control mesh, §7:
    * `surface` names a built-in control or `mesh` is the control), 'lattice' (parameter rows).
    */

@@ -19,7 +19,8 @@ constexpr int kMaxFaces = 1000000;  // the largest face count phex accepts
 // How the triangulation is laid (§5, §7).
 enum class TriangulationMethod {
   Auto,          // the analytic surface's recommended method (SurfaceSpec::method); uploaded meshes: Prespecified,
-                 // or Subdivision's route for a closed convex one (geodesicTriangulation)
+                 // or Subdivision's route for a closed convex one (geodesicTriangulation), or Subdivision
+                 // itself for a closed convex polyhedron of fewer vertices than the faces asked for (a control mesh)
   Lattice,       // rows of the parameter domain, every other one shifted (analytic surfaces only)
   Progressive,   // Method 1, progressive conjugation (§5.2)
   Prespecified,  // Method 2, pre-specified conjugation along a direction field (§5.2)
