@@ -429,7 +429,7 @@ MeshSurface::MeshSurface(TriMesh mesh, std::string name) : mesh_(std::move(mesh)
 // height under a tenth of their longest edge) do not count, their planes are anyone's; nor do triangles folded
 // back over each other (turning by more than kFoldDegrees), the mark of a broken parametrization rather than a
 // ridge: a jittered, graded grid of a smooth wave had 127 such edges, and laid as well as an even one.
-void MeshSurface::noteCrease(int f, int g, int a, int b) {
+void MeshSurface::noteCrease(int f, int g, int a, int b, std::vector<double>& turns) {
   auto normal = [&](int t) -> std::optional<Vec3> {
     const Vec3 p = mesh_.V.row(mesh_.F(t, 0)), q = mesh_.V.row(mesh_.F(t, 1)), r = mesh_.V.row(mesh_.F(t, 2));
     const Vec3 n = (q - p).cross(r - p);
@@ -442,6 +442,7 @@ void MeshSurface::noteCrease(int f, int g, int a, int b) {
   const double lengths = norm(*nf) * norm(*ng);
   if (!(lengths > 0)) return;
   const double cosine = dot(*nf, *ng) / lengths;
+  turns.push_back(cosine);
   if (!(cosine < std::cos(kCreaseDegrees * M_PI / 180)) || cosine < std::cos(kFoldDegrees * M_PI / 180)) return;
   ++creases_.edges;
   const double degrees = std::acos(std::max(-1.0, cosine)) * 180 / M_PI;
@@ -463,6 +464,7 @@ void MeshSurface::buildTopology() {
     for (int f = 0; f < nf; ++f)
       for (int k = 0; k < 3; ++k) around[fill[mesh_.F(f, k)]++] = f;
   }
+  std::vector<double> turns;  // the cosine of every interior edge's turn (noteCrease)
   // Neighbouring vertices; each edge a->b must appear once, and b->a at most once (else non-manifold).
   neighbourStart_.assign(nv + 1, 0);
   neighbours_.clear();
@@ -487,7 +489,7 @@ void MeshSurface::buildTopology() {
           if (mesh_.F(g, c) == b && mesh_.F(g, (c + 1) % 3) == a) ++backward, twin = g;
         }
       }
-      if (backward == 1 && forward == 1 && a < b) noteCrease(f, twin, a, b);
+      if (backward == 1 && forward == 1 && a < b) noteCrease(f, twin, a, b, turns);
       if (forward > 1 || backward > 1)
         fail(name_, "the edge from vertex " + std::to_string(a) + " to " + std::to_string(b) +
                         " is non-manifold or inconsistently oriented (clean the mesh with cleanTriMesh first)");
@@ -502,6 +504,10 @@ void MeshSurface::buildTopology() {
     ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
     neighbours_.insert(neighbours_.end(), ring.begin(), ring.end());
     neighbourStart_[a + 1] = static_cast<int>(neighbours_.size());
+  }
+  if (!turns.empty()) {
+    std::nth_element(turns.begin(), turns.begin() + turns.size() / 2, turns.end());
+    creases_.medianDegrees = std::acos(std::clamp(turns[turns.size() / 2], -1.0, 1.0)) * 180 / M_PI;
   }
   // Boundary loops follow the boundary edges in the triangles' direction.
   boundaryLoops_.clear();

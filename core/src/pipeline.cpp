@@ -223,10 +223,11 @@ double triangleSize(const TriMesh& mesh) {
 }
 
 // How finely to refine `mesh` for `cell` (1: not at all). Neither a plane (nothing to smooth) nor a mesh with
-// a crease (which the jets would round off: it gets its note instead).
+// a sharp crease (which the jets would round off: it gets its note instead); a low-poly mesh whose facets
+// turn by 30 degrees here and there, about as much as elsewhere, is refined.
 int refinementFor(const MeshSurface& mesh, double cell) {
   const double edge = triangleSize(mesh.mesh());
-  if (mesh.planar() || mesh.creases().edges > 0 || !(cell > 0) || !(edge > kCoarseUpload * cell)) return 1;
+  if (mesh.planar() || mesh.creases().sharp() || !(cell > 0) || !(edge > kCoarseUpload * cell)) return 1;
   const double most = std::floor(std::sqrt(double(MeshSurface::kMaxRefinedTriangles) / double(mesh.mesh().F.rows())));
   return static_cast<int>(std::clamp(std::ceil(edge / (kRefinedEdge * cell)), 1.0, std::max(1.0, most)));
 }
@@ -704,7 +705,7 @@ std::string uploadNote(const Surface* surface) {
     // A ridge or fold (a gable roof): the method needs a tangent plane everywhere (§3), and a panel across
     // the crease cannot be planar. A noisy mesh's sharp edges are its noise, said below instead.
     const MeshSurface::Creases& c = mesh->creases();
-    if (c.edges < kCreaseEdges) return "";
+    if (c.edges < kCreaseEdges || !c.sharp()) return "";
     std::ostringstream at;
     at.precision(4);
     at << "(" << c.at.x() << ", " << c.at.y() << ", " << c.at.z() << ")";
@@ -811,13 +812,23 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       if (params.start) *params.start -= origin;
       if (const int k = refinementFor(*upload, params.cell > 0 ? params.cell : cellForFaceCount(*upload, params.faces));
           k > 1) {
-        t.surface = refinedUpload(upload, k);
+        const std::shared_ptr<const MeshSurface> refined = refinedUpload(upload, k);
         std::ostringstream s;
         s.precision(3);
         s << "the uploaded mesh is coarse for this lay (its triangles' size " << triangleSize(upload->mesh()) << " against a cell of "
-          << (params.cell > 0 ? params.cell : cellForFaceCount(*upload, params.faces)) << "): laid on a smooth surface through its "
-          << upload->vertexCount() << " vertices, each of its " << upload->mesh().F.rows() << " triangles split " << k << " x " << k
-          << " onto the cubic fits around its corners, so that panels need not bend over its facets' edges";
+          << (params.cell > 0 ? params.cell : cellForFaceCount(*upload, params.faces)) << "): ";
+        // Too coarse for its fits to agree (a steep dome sampled 6 x 6, whose fits around a corner span half
+        // of it): their blend would crease where the mesh does not, so the facets are laid as they are.
+        if (refined->creases().sharp()) {
+          s << "too coarse to be refined smoothly (the fits around its vertices disagree: the refinement would turn by "
+            << std::lround(refined->creases().degrees) << " degrees between neighbouring triangles), so laid on its facets; "
+               "upload a finer mesh for panels that follow the surface";
+        } else {
+          t.surface = refined;
+          s << "laid on a smooth surface through its " << upload->vertexCount() << " vertices, each of its "
+            << upload->mesh().F.rows() << " triangles split " << k << " x " << k
+            << " onto the cubic fits around its corners, so that panels need not bend over its facets' edges";
+        }
         surfaceNote = s.str();
       }
     } else {

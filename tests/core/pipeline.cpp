@@ -921,6 +921,24 @@ TEST_CASE("pipeline: a coarse upload laid finer than its triangles is laid on a 
   // A mesh as fine as the lay is laid as it is.
   p.mesh = heightFieldUpload("survey", 60, dome);
   CHECK(allNotes(triangulate(p).triangulation).find("coarse") == std::string::npos);
+  // A low-poly hemisphere: its facets turn by 30 degrees at the rim, three times their median turn, which is
+  // no crease. Refined, without a crease note (on its facets it stopped short of planarity, exit 2).
+  p.mesh = heightFieldUpload("low-poly", 8, [](double x, double y) { return std::sqrt(std::max(0.0, 2.05 - x * x - y * y)); });
+  p.faces = 1000;
+  const MeshSurface lowPoly(readMeshBytes(p.mesh->bytes.data(), p.mesh->bytes.size(), "obj", "low-poly.obj"));
+  CHECK(lowPoly.creases().edges > 0);
+  CHECK_FALSE(lowPoly.creases().sharp());
+  const PipelineResult hemisphere = runPipeline(p);
+  const std::string hemisphereNotes = allNotes(hemisphere.triangulation);
+  INFO(hemisphereNotes);
+  CHECK(hemisphereNotes.find("laid on a smooth surface through its 81 vertices") != std::string::npos);
+  CHECK(hemisphereNotes.find("crease") == std::string::npos);
+  CHECK(hemisphere.solve.converged);
+  CHECK(hemisphere.interiorHexagonFraction >= 0.98);
+  // A steep dome sampled 6 x 6: its fits around a corner span half of it, and their blend would crease
+  // (76 degrees): laid on its facets, and the note says why.
+  p.mesh = heightFieldUpload("steep", 6, [](double x, double y) { return 1 - 0.8 * (x * x + y * y); });
+  CHECK(allNotes(triangulate(p).triangulation).find("too coarse to be refined smoothly") != std::string::npos);
   clearUploadCache();
 }
 

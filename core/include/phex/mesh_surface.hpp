@@ -81,6 +81,10 @@ class MeshSurface : public Surface {
     int edges = 0;
     double degrees = 0;
     Vec3 at = Vec3::Zero();
+    double medianDegrees = 0;  // the median turn over all interior edges (slivers aside)
+    // A ridge or valley, not a coarse faceting: the sharpest turn stands out from the typical one (a gable's
+    // 44 degrees against 0; a low-poly dome's 30 against a median of 10 does not).
+    bool sharp() const { return edges > 0 && degrees > 3 * medianDegrees + 15; }
   };
   static constexpr double kCreaseDegrees = 30.0, kFoldDegrees = 150.0;
   const Creases& creases() const { return creases_; }
@@ -104,7 +108,7 @@ class MeshSurface : public Surface {
     int count = 0;  // leaf: number of triangles; 0 for an inner node
   };
   void buildTopology();
-  void noteCrease(int f, int g, int a, int b);
+  void noteCrease(int f, int g, int a, int b, std::vector<double>& turns);
   Creases creases_;
   // Fits every vertex's jet over at least `rings` rings; returns the median fit residual.
   double estimateCurvature(int rings);
