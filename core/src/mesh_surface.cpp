@@ -599,7 +599,10 @@ TriMesh MeshSurface::refined(int k) const {
   const std::vector<Vec3> trial = trialNormals();
   FitScratch scratch(nv);
   std::vector<VertexFit> jets(nv);
-  for (int v = 0; v < nv; ++v) jets[v] = fitVertex(v, curvatureRings_, trial[v], scratch);
+  // Over two rings whatever noise() says: a coarse mesh's fits miss its vertices because the surface turns
+  // much within two rings, not because they are scattered (a torus sampled 24 x 12 counted as noisy, and
+  // its fits over 4 rings, spanning a third of its tube, blended into a surface far off it).
+  for (int v = 0; v < nv; ++v) jets[v] = fitVertex(v, 2, trial[v], scratch);
   // x projected onto vertex v's jet (through the vertex: its constant term left out).
   auto onJet = [&](int v, const Vec3& x) -> Vec3 {
     const VertexFit& j = jets[v];

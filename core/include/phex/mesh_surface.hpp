@@ -91,8 +91,8 @@ class MeshSurface : public Surface {
 
   // The mesh refined into a smooth surface through its vertices: each triangle split into k x k, the new
   // points on the blend, by their barycentric coordinates, of their projections onto the cubic jets fitted
-  // around the triangle's three corners (the very fits its curvature comes from, shifted to pass through
-  // their vertex). Like Phong tessellation with the corners' tangent planes replaced by their cubic jets:
+  // around the triangle's three corners (the fits its curvature comes from, over two rings, shifted to pass
+  // through their vertex). Like Phong tessellation with the corners' tangent planes replaced by their cubic jets:
   // the blend passes through every vertex, is continuous across edges (an edge's points depend on its two
   // ends alone), and its curvature is the jets' where Phong's kinks at every edge. A corner without a jet
   // (a tiny mesh) adds its linear interpolation instead. The vertices keep their ids (0 .. #V-1), then come
