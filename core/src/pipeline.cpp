@@ -817,7 +817,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
         s.precision(3);
         s << "the uploaded mesh is coarse for this lay (its triangles' size " << triangleSize(upload->mesh()) << " against a cell of "
           << (params.cell > 0 ? params.cell : cellForFaceCount(*upload, params.faces)) << "): ";
-        // Too coarse for its fits to agree (a steep dome sampled 6 x 6, whose fits around a corner span half
+        // Too coarse for its fits to agree (a steep dome sampled 4 x 4, whose fits around a corner span most
         // of it): their blend would crease where the mesh does not, so the facets are laid as they are.
         if (refined->creases().sharp()) {
           s << "too coarse to be refined smoothly (the fits around its vertices disagree: the refinement would turn by "
