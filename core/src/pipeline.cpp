@@ -205,9 +205,9 @@ std::shared_ptr<const MeshSurface> uploadedSurface(const MeshInput& in, bool& re
 // sit on flat facets that bend at every edge, while its directions come from curvature fitted smoothly
 // across them. Panels across the facets' edges cannot be planar and near the surface at once: a dome
 // sampled 24 x 24 (1152 triangles) stalled at 2e-3 at 3000 faces (exit 2), a wave 12 x 12 ended 1.5 % of the
-// diagonal off at 1000 faces. Where its triangles are over kCoarseUpload cells in size (triangleSize), the lay runs on the upload
-// refined into a smooth surface through its vertices (MeshSurface::refined), k x k per triangle for edges
-// of about kRefinedEdge of a cell.
+// diagonal off at 1000 faces. Where its triangles are over kCoarseUpload cells in size (triangleSize), the
+// lay runs on the upload refined into a smooth surface through its vertices (MeshSurface::refined), k x k
+// per triangle for edges of about kRefinedEdge of a cell.
 constexpr double kCoarseUpload = 1.5, kRefinedEdge = 0.5;
 
 // The edge of the equilateral triangle of a mesh's mean triangle area: its triangles' size. The mean edge
@@ -791,8 +791,8 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
         t.field.clear();
         origin = Vec3::Zero();  // the route below works in the file's coordinates, as method subdivision does
         std::ostringstream s;
-        s << "the upload is a closed convex polyhedron of " << upload->vertexCount() << " vertices, faceted (edges "
-          << "turning by up to " << std::lround(upload->creases().degrees) << " degrees) and coarser than the "
+        s << "the upload is a closed convex polyhedron of " << upload->vertexCount()
+          << " vertices, faceted (edges turning by up to " << std::lround(upload->creases().degrees) << " degrees) and coarser than the "
           << std::lround(faces) << " faces asked for: taken as the control mesh of a Loop subdivision surface and "
              "tiled on its limit surface (§7), as method subdivision does; upload a finer mesh of the surface, or "
              "choose method prespecified, to have its facets laid as they are";
@@ -810,13 +810,13 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       t.surface = upload;
       t.origin = origin;
       if (params.start) *params.start -= origin;
-      if (const int k = refinementFor(*upload, params.cell > 0 ? params.cell : cellForFaceCount(*upload, params.faces));
-          k > 1) {
+      const double cellAsked = params.cell > 0 ? params.cell : cellForFaceCount(*upload, params.faces);
+      if (const int k = refinementFor(*upload, cellAsked); k > 1) {
         const std::shared_ptr<const MeshSurface> refined = refinedUpload(upload, k);
         std::ostringstream s;
         s.precision(3);
-        s << "the uploaded mesh is coarse for this lay (its triangles' size " << triangleSize(upload->mesh()) << " against a cell of "
-          << (params.cell > 0 ? params.cell : cellForFaceCount(*upload, params.faces)) << "): ";
+        s << "the uploaded mesh is coarse for this lay (its triangles' size " << triangleSize(upload->mesh())
+          << " against a cell of " << cellAsked << "): ";
         // Too coarse for its fits to agree (a steep dome sampled 4 x 4, whose fits around a corner span most
         // of it): their blend would crease where the mesh does not, so the facets are laid as they are.
         if (refined->creases().sharp()) {
@@ -854,9 +854,10 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     if (const auto* mesh = dynamic_cast<const MeshSurface*>(t.surface.get());
         mesh && mesh->planar() && params.method == TriangulationMethod::Prespecified && params.field == "principal") {
       params.field = t.field = "section";
-      surfaceNote += std::string(surfaceNote.empty() ? "" : "; ") + "the uploaded mesh is a plane (no curvature over 1e-6 of its diagonal's inverse anywhere): "
-                        "every hexagon tiling of it is planar (§3), and its principal directions are undefined; "
-                        "laid in straight rows along plane sections (field section) instead";
+      surfaceNote += std::string(surfaceNote.empty() ? "" : "; ") +
+                     "the uploaded mesh is a plane (no curvature over 1e-6 of its diagonal's inverse anywhere): "
+                     "every hexagon tiling of it is planar (§3), and its principal directions are undefined; "
+                     "laid in straight rows along plane sections (field section) instead";
     }
     const double cell = checkCell(*t.surface);
     // §7 for an upload: a closed convex surface (a pebble, an egg, an ellipsoid) has umbilics and no regular
