@@ -258,7 +258,7 @@ async function curvaturePreview() {
 
 // Notes that tell a designer the result falls short, or why the method chose what it did against the form:
 // shown open and marked, where the rest (start chosen, layers laid) stay folded.
-const WARNING_NOTE = /covers only|noisy|crease|umbilic|cannot|stopped short|no valid triangle|asymptotic direction|fold onto|coarse for this lay|polyhedron/i;
+const WARNING_NOTE = /covers only|noisy|crease|umbilic|cannot|stopped short|no valid triangle|asymptotic direction|fold onto|coarse for this lay|polyhedron|off the surface, the farthest/i;
 
 /** The triangulation's notes (laying, start choice, repairs, shortfalls) in a folded list under the statistics. */
 function showNotes(notes) {

@@ -982,6 +982,42 @@ TEST_CASE("pipeline: an uploaded closed convex polyhedron coarser than the lay i
   clearUploadCache();
 }
 
+TEST_CASE("pipeline: a P-Hex node far off the surface is named in the notes") {
+  // A torus sampled 24 x 12, refined, at 1000 faces: a lay's row matched across the hole left triangles 3.2
+  // long (cells of 0.27), and the dual put a node 0.8 off the surface: converged and planar all the same.
+  // Such a result says so (and the command line exits 2); a good one says nothing of the kind.
+  std::ostringstream obj;
+  obj << std::fixed;
+  obj.precision(9);
+  const int nu = 24, nv = 12;
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const double u = 2 * kPi * i / nu, v = 2 * kPi * j / nv, r = 2 + 0.8 * std::cos(v);
+      obj << "v " << r * std::cos(u) << ' ' << r * std::sin(u) << ' ' << 0.8 * std::sin(v) << '\n';
+    }
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const int a = j * nu + i + 1, b = j * nu + (i + 1) % nu + 1, c = (j + 1) % nv * nu + (i + 1) % nu + 1,
+                d = (j + 1) % nv * nu + i + 1;
+      obj << "f " << a << ' ' << b << ' ' << c << "\nf " << a << ' ' << c << ' ' << d << '\n';
+    }
+  const std::string text = obj.str();
+  PipelineParams p;
+  p.mesh = MeshInput{std::vector<std::uint8_t>(text.begin(), text.end()), "obj", "low-poly-torus.obj"};
+  p.faces = 1000;
+  const PipelineResult far = runPipeline(p);
+  const std::string notes = allNotes(far.triangulation);
+  INFO(notes);
+  REQUIRE(far.metrics.surfaceDistanceMax > kFarNodeDistance);
+  CHECK(notes.find("P-Hex nodes lie over 1 % of the diagonal off the surface, the farthest 9.8") != std::string::npos);
+  p.mesh = heightFieldUpload("dome", 40, [](double x, double y) { return 0.4 - 0.2 * (x * x + y * y); });
+  p.faces = 300;
+  const PipelineResult near = runPipeline(p);
+  CHECK(near.metrics.surfaceDistanceMax < kFarNodeDistance);
+  CHECK(allNotes(near.triangulation).find("off the surface, the farthest") == std::string::npos);
+  clearUploadCache();
+}
+
 // A closed ellipsoid with semi-axes a, b, c as an uploaded OBJ: nu meridians, nv - 1 parallels and two poles.
 MeshInput closedEllipsoidUpload(int nu, int nv, double a, double b, double c) {
   std::ostringstream obj;

@@ -15,6 +15,9 @@
 namespace phex {
 
 constexpr int kMaxFaces = 1000000;  // the largest face count phex accepts
+// A P-Hex node farther off the surface than this share of the bounding-box diagonal (five times the 0.2 %
+// goal) is a shortfall the result's notes name (and the command line exits 2 for).
+constexpr double kFarNodeDistance = 0.01;
 
 // How the triangulation is laid (§5, §7).
 enum class TriangulationMethod {
