@@ -331,6 +331,26 @@ test('runs on the same upload reuse its surface, with the same result, until cle
   assert.equal((await phex.run({ ...upload, meshName: 'other.obj' })).surfaceReused, false);
 });
 
+test('a coarse upload laid finer than its triangles is laid on its smooth refinement, kept with it', async () => {
+  // A dome sampled 8 x 8 (128 triangles) at 3000 faces: on its facets the solve stalled at 3e-3.
+  const mesh = gridOBJ(8, 8, (u, v) => {
+    const x = -1 + 2 * u, y = -1 + 2 * v;
+    return [x, y, 0.5 - 0.25 * (x * x + y * y)];
+  });
+  const upload = { mesh, meshFormat: 'obj', meshName: 'sketch.obj', faces: 3000 };
+  await phex.clearUploadCache();
+  const r = await phex.run(upload);
+  assert.ok(r.triangulation.notes.some((note) => /coarse for this lay/.test(note) && /smooth surface/.test(note)));
+  assert.equal(r.solve.converged, true);
+  assert.equal(r.metrics.selfIntersectingCount, 0);
+  assert.ok(r.metrics.interiorHexagonFraction >= 0.99, String(r.metrics.interiorHexagonFraction));
+  assert.ok(r.metrics.surfaceDistanceMax < 0.002, String(r.metrics.surfaceDistanceMax));
+  const again = await phex.run(upload);
+  assert.equal(again.surfaceReused, true);
+  assert.deepEqual(again.hex.positions, r.hex.positions);
+  await phex.clearUploadCache();
+});
+
 test('an upload in site coordinates is computed about its centre and comes back where the file has it', async () => {
   const site = [512345.678, 5432109.876, 250];
   const mesh = gridOBJ(60, 60, (u, v) => {
