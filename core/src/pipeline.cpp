@@ -1388,17 +1388,20 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // A node far off the surface (a rounded box at 8000 faces: one 19 % of the diagonal off, converged and
   // planar, 0 % hexagons lost): its faces' planes meet far away, from a lay's triangle that bridged a gap or
   // three planes through nearly one line. Named, so that the result is not taken for a good one.
-  if (r.metrics.surfaceDistanceMax > kFarNodeDistance) {
-    int far = 0, farthest = 0;
-    for (int v = 0; v < static_cast<int>(r.metrics.surfaceDistance.size()); ++v) {
-      far += r.metrics.surfaceDistance[v] > kFarNodeDistance;
-      if (r.metrics.surfaceDistance[v] > r.metrics.surfaceDistance[farthest]) farthest = v;
-    }
+  const double diagonal = surface.bounds().diagonal().norm(), edge = r.hex.meanEdgeLength();
+  const double farOff = diagonal > 0 ? std::max(kFarNodeDistance, edge / diagonal) : kFarNodeDistance;
+  int farthest = 0;
+  for (int v = 0; v < static_cast<int>(r.metrics.surfaceDistance.size()); ++v) {
+    r.farNodes += r.metrics.surfaceDistance[v] > farOff;
+    if (r.metrics.surfaceDistance[v] > r.metrics.surfaceDistance[farthest]) farthest = v;
+  }
+  if (r.farNodes > 0) {
+    const int far = r.farNodes;
     const Vec3 at = r.hex.vertex(farthest);
     std::ostringstream s;
     s.precision(4);
-    s << far << (far == 1 ? " P-Hex node lies" : " P-Hex nodes lie") << " over " << 100 * kFarNodeDistance
-      << " % of the diagonal off the surface, the farthest " << 100 * r.metrics.surfaceDistanceMax << " % near ("
+    s << far << (far == 1 ? " P-Hex node lies" : " P-Hex nodes lie") << " over " << 100 * farOff
+      << " % of the diagonal (and a mean edge) off the surface, the farthest " << 100 * r.metrics.surfaceDistanceMax << " % near ("
       << at.x() << ", " << at.y() << ", " << at.z() << ") (the goal is 0.2 %): the planes of its faces meet far "
          "from the surface there (a triangle of the lay across a gap, or three planes through nearly one line); "
          "another face count, start or field may do";

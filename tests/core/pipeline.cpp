@@ -985,7 +985,7 @@ TEST_CASE("pipeline: an uploaded closed convex polyhedron coarser than the lay i
 TEST_CASE("pipeline: a P-Hex node far off the surface is named in the notes") {
   // A torus sampled 24 x 12, refined, at 1000 faces: a lay's row matched across the hole left triangles 3.2
   // long (cells of 0.27), and the dual put a node 0.8 off the surface: converged and planar all the same.
-  // Such a result says so (and the command line exits 2); a good one says nothing of the kind.
+  // Such a result says so (farNodes; the command line exits 2); a good one says nothing of the kind.
   std::ostringstream obj;
   obj << std::fixed;
   obj.precision(9);
@@ -1009,12 +1009,23 @@ TEST_CASE("pipeline: a P-Hex node far off the surface is named in the notes") {
   const std::string notes = allNotes(far.triangulation);
   INFO(notes);
   REQUIRE(far.metrics.surfaceDistanceMax > kFarNodeDistance);
-  CHECK(notes.find("P-Hex nodes lie over 1 % of the diagonal off the surface, the farthest 9.8") != std::string::npos);
+  CHECK(far.farNodes == 6);  // 8 over 1 % of the diagonal, 6 of them also over a mean edge
+  CHECK(notes.find("P-Hex nodes lie over") != std::string::npos);
+  CHECK(notes.find("of the diagonal (and a mean edge) off the surface, the farthest 9.8") != std::string::npos);
   p.mesh = heightFieldUpload("dome", 40, [](double x, double y) { return 0.4 - 0.2 * (x * x + y * y); });
   p.faces = 300;
   const PipelineResult near = runPipeline(p);
+  CHECK(near.farNodes == 0);
   CHECK(near.metrics.surfaceDistanceMax < kFarNodeDistance);
   CHECK(allNotes(near.triangulation).find("off the surface, the farthest") == std::string::npos);
+  // Twelve hexagons on a torus: panels that size bulge off it by over 1 % of the diagonal, but by less than
+  // their size: no far node.
+  PipelineParams coarse;
+  coarse.surface = "torus";
+  coarse.faces = 12;
+  const PipelineResult twelve = runPipeline(coarse);
+  CHECK(twelve.metrics.surfaceDistanceMax > kFarNodeDistance);
+  CHECK(twelve.farNodes == 0);
   clearUploadCache();
 }
 

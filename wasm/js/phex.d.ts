@@ -99,8 +99,8 @@ export interface Metrics {
   selfIntersectingCount: number;
   /** Per-vertex distance to the surface, divided by the surface's bounding-box diagonal (#V). */
   surfaceDistance: Float64Array;
-  /** Largest and mean of `surfaceDistance`. Over 0.01 (five times the 0.2 % goal) the notes name the farthest
-   * node, and the command line exits 2. */
+  /** Largest and mean of `surfaceDistance`. Where nodes lie off by over 0.01 (five times the 0.2 % goal) and a
+   * mean edge, the notes name the farthest, and the command line exits 2. */
   surfaceDistanceMax: number;
   surfaceDistanceMean: number;
   /** Per face: area in model units squared (older cores lack it: use {@link faceAreas}). */
@@ -224,6 +224,9 @@ export interface Result {
    * preview on the same upload: see {@link PHex.clearUploadCache}. Always false for analytic surfaces. A coarse
    * upload laid finer than its triangles is laid on its smooth refinement (a note says so), kept with it. */
   surfaceReused: boolean;
+  /** P-Hex nodes off the surface by over 1 % of the diagonal (five times the goal) and a mean edge: a shortfall
+   * the notes name (the farthest, where), for which the command line exits 2. 0 for a good result. */
+  farNodes: number;
   /** An upload far from the origin (more than ten times its size: site coordinates) is computed about the
    * centre of its box, this point, where its coordinates keep their digits; every mesh and note here is in the
    * file's coordinates all the same. [0, 0, 0] otherwise. */

@@ -16,7 +16,9 @@ namespace phex {
 
 constexpr int kMaxFaces = 1000000;  // the largest face count phex accepts
 // A P-Hex node farther off the surface than this share of the bounding-box diagonal (five times the 0.2 %
-// goal) is a shortfall the result's notes name (and the command line exits 2 for).
+// goal) and than the mesh's mean edge is a shortfall (PipelineResult::farNodes) the notes name and the
+// command line exits 2 for. The mean edge spares coarse meshes, whose panels bulge that far by their size
+// (12 hexagons on a torus).
 constexpr double kFarNodeDistance = 0.01;
 
 // How the triangulation is laid (§5, §7).
@@ -99,6 +101,7 @@ struct PipelineResult {
   // the Dupin dual stalled or left faces crossing themselves and the tangent dual did better.
   Duality duality = Duality::Dupin;
   MeshMetrics metrics;         // of `hex`
+  int farNodes = 0;            // nodes of `hex` off the surface by over kFarNodeDistance and a mean edge
   double interiorHexagonFraction = 0.0;  // hexagons among the faces not on the boundary (dual.boundaryFace)
   PlanarizeReport solve;
   int boundaryPanelsSplit = 0;  // boundary panels cut in two to become planar (PipelineParams::splitBoundaryPanels)
