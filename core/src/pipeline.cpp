@@ -311,6 +311,20 @@ void validate(const PipelineParams& p) {
     fail("the lattice method needs an analytic surface; use method 'progressive' or 'prespecified' for an uploaded mesh");
 }
 
+double farNodeDistance(const PolyMesh& hex, double diagonal) {
+  return diagonal > 0 ? std::max(kFarNodeDistance, hex.meanEdgeLength() / diagonal) : kFarNodeDistance;
+}
+
+int countFarNodes(const std::vector<double>& distance, double farOff, int* farthest) {
+  int far = 0, worst = 0;
+  for (int v = 0; v < static_cast<int>(distance.size()); ++v) {
+    far += distance[v] > farOff;
+    if (distance[v] > distance[worst]) worst = v;
+  }
+  if (farthest) *farthest = worst;
+  return far;
+}
+
 void clearUploadCache() {
   UploadCache& cache = uploadCache();
   const std::lock_guard<std::mutex> lock(cache.mutex);
@@ -1388,13 +1402,10 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // A node far off the surface (a rounded box at 8000 faces: one 19 % of the diagonal off, converged and
   // planar, 0 % hexagons lost): its faces' planes meet far away, from a lay's triangle that bridged a gap or
   // three planes through nearly one line. Named, so that the result is not taken for a good one.
-  const double diagonal = surface.bounds().diagonal().norm(), edge = r.hex.meanEdgeLength();
-  const double farOff = diagonal > 0 ? std::max(kFarNodeDistance, edge / diagonal) : kFarNodeDistance;
+  const double diagonal = surface.bounds().diagonal().norm();
+  const double farOff = farNodeDistance(r.hex, diagonal);
   int farthest = 0;
-  for (int v = 0; v < static_cast<int>(r.metrics.surfaceDistance.size()); ++v) {
-    r.farNodes += r.metrics.surfaceDistance[v] > farOff;
-    if (r.metrics.surfaceDistance[v] > r.metrics.surfaceDistance[farthest]) farthest = v;
-  }
+  r.farNodes = countFarNodes(r.metrics.surfaceDistance, farOff, &farthest);
   if (r.farNodes > 0) {
     const int far = r.farNodes;
     const Vec3 at = r.hex.vertex(farthest);

@@ -144,6 +144,13 @@ std::string resolveField(const PipelineParams& params);
 // for a 120k-triangle upload), as an app does when the design is closed. Safe to call from any thread.
 void clearUploadCache();
 
+// Far nodes (kFarNodeDistance): the share of the diagonal beyond which a node of `hex` is one, the larger of
+// kFarNodeDistance and the mesh's mean edge over `diagonal` (the surface's bounding-box diagonal); and how many
+// of the nodes' `distance`s (shares of the diagonal, as MeshMetrics::surfaceDistance) exceed `farOff`, the
+// farthest node's index in `farthest` (0 for none).
+double farNodeDistance(const PolyMesh& hex, double diagonal);
+int countFarNodes(const std::vector<double>& distance, double farOff, int* farthest = nullptr);
+
 // Throws Error(InvalidParameter) naming the first parameter that is wrong.
 void validate(const PipelineParams& params);
 
