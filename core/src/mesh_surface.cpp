@@ -624,37 +624,33 @@ TriMesh MeshSurface::refined(int k) const {
       if (b[c] > 0) q += b[c] * onJet(ids[c], x);
     return q;
   };
-  // Every edge's k - 1 inner points, from its lower vertex id to its higher.
-  std::vector<std::array<int, 3>> edges;  // (low, high, first point id)
-  edges.reserve(3 * static_cast<std::size_t>(nf));
-  for (int f = 0; f < nf; ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int a = mesh_.F(f, c), b = mesh_.F(f, (c + 1) % 3);
-      edges.push_back({std::min(a, b), std::max(a, b), 0});
-    }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end(),
-                          [](const std::array<int, 3>& x, const std::array<int, 3>& y) { return x[0] == y[0] && x[1] == y[1]; }),
-              edges.end());
+  // Every edge's k - 1 inner points, from its lower vertex id to its higher, in the order of the adjacency
+  // (each vertex's neighbours, sorted): the edge a-b (a < b) is neighbours_[j] = b of a's row, its points from
+  // edgeFirst[j] on.
+  std::vector<int> edgeFirst(neighbours_.size(), -1);
+  Eigen::Index edgeCount = 0;
+  for (int a = 0; a < nv; ++a)
+    for (int j = neighbourStart_[a]; j < neighbourStart_[a + 1]; ++j) edgeCount += neighbours_[j] > a;
   const std::size_t inner = static_cast<std::size_t>(k - 1) * (k - 2) / 2;
   TriMesh out;
-  out.V.resize(nv + static_cast<Eigen::Index>(edges.size()) * (k - 1) + static_cast<Eigen::Index>(nf * inner), 3);
+  out.V.resize(nv + edgeCount * (k - 1) + static_cast<Eigen::Index>(nf * inner), 3);
   out.V.topRows(nv) = mesh_.V;
   Eigen::Index next = nv;
-  for (auto& e : edges) {
-    e[2] = static_cast<int>(next);
-    const int ids[3] = {e[0], e[1], e[0]};
-    for (int i = 1; i < k; ++i) {
-      const double b[3] = {double(k - i) / k, double(i) / k, 0.0};
-      out.V.row(next++) = blend(ids, b).transpose();
+  for (int a = 0; a < nv; ++a)
+    for (int j = neighbourStart_[a]; j < neighbourStart_[a + 1]; ++j) {
+      if (neighbours_[j] < a) continue;
+      edgeFirst[j] = static_cast<int>(next);
+      const int ids[3] = {a, neighbours_[j], a};
+      for (int i = 1; i < k; ++i) {
+        const double b[3] = {double(k - i) / k, double(i) / k, 0.0};
+        out.V.row(next++) = blend(ids, b).transpose();
+      }
     }
-  }
   auto edgePoint = [&](int a, int b, int i) {  // the point i / k of the way from a to b (0 < i < k)
-    const auto it = std::lower_bound(edges.begin(), edges.end(), std::array<int, 3>{std::min(a, b), std::max(a, b), 0},
-                                     [](const std::array<int, 3>& x, const std::array<int, 3>& y) {
-                                       return x[0] != y[0] ? x[0] < y[0] : x[1] < y[1];
-                                     });
-    return (*it)[2] + (a < b ? i : k - i) - 1;
+    const int lo = std::min(a, b), hi = std::max(a, b);
+    const int* row = neighbours_.data();
+    const int j = static_cast<int>(std::lower_bound(row + neighbourStart_[lo], row + neighbourStart_[lo + 1], hi) - row);
+    return edgeFirst[j] + (a < b ? i : k - i) - 1;
   };
   out.F.resize(static_cast<Eigen::Index>(nf) * k * k, 3);
   Eigen::Index t = 0;
