@@ -214,22 +214,17 @@ constexpr double kCoarseUpload = 1.5, kRefinedEdge = 0.5;
 // would count long thin triangles by their long edges, which a vault's grid runs along its straight
 // direction (0.2 x 0.02 triangles on a 20 m vault were refined 4 x 4 for nothing: three times the time).
 double triangleSize(const TriMesh& mesh) {
-  double area = 0;
-  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) {
-    const Vec3 a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)), c = mesh.V.row(mesh.F(f, 2));
-    area += 0.5 * (b - a).cross(c - a).norm();
-  }
-  return mesh.F.rows() > 0 ? std::sqrt(4 * area / (std::sqrt(3.0) * double(mesh.F.rows()))) : 0.0;
+  return mesh.F.rows() > 0 ? std::sqrt(4 * mesh.area() / (std::sqrt(3.0) * double(mesh.F.rows()))) : 0.0;
 }
 
-// How finely to refine `mesh` for `cell` (1: not at all). Neither a plane (nothing to smooth) nor a mesh with
-// a sharp crease (which the jets would round off: it gets its note instead); a low-poly mesh whose facets
-// turn by 30 degrees here and there, about as much as elsewhere, is refined.
-int refinementFor(const MeshSurface& mesh, double cell) {
-  const double edge = triangleSize(mesh.mesh());
-  if (mesh.planar() || mesh.creases().sharp() || !(cell > 0) || !(edge > kCoarseUpload * cell)) return 1;
+// How finely to refine `mesh`, whose triangles are of `size` (triangleSize), for `cell` (1: not at all).
+// Neither a plane (nothing to smooth) nor a mesh with a sharp crease (which the jets would round off: it gets
+// its note instead); a low-poly mesh whose facets turn by 30 degrees here and there, about as much as
+// elsewhere, is refined.
+int refinementFor(const MeshSurface& mesh, double size, double cell) {
+  if (mesh.planar() || mesh.creases().sharp() || !(cell > 0) || !(size > kCoarseUpload * cell)) return 1;
   const double most = std::floor(std::sqrt(double(MeshSurface::kMaxRefinedTriangles) / double(mesh.mesh().F.rows())));
-  return static_cast<int>(std::clamp(std::ceil(edge / (kRefinedEdge * cell)), 1.0, std::max(1.0, most)));
+  return static_cast<int>(std::clamp(std::ceil(size / (kRefinedEdge * cell)), 1.0, std::max(1.0, most)));
 }
 
 // The cached upload `coarse` refined k x k (kept with it for the next run).
@@ -791,19 +786,22 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
   std::shared_ptr<const MeshSurface> upload;  // read once (and kept: uploadedSurface)
   if (params.mesh && params.method != TriangulationMethod::Subdivision)
     upload = uploadedSurface(*params.mesh, t.surfaceReused, origin);
+  std::optional<TriMesh> polyhedron;  // the upload so taken, checked as a control mesh, in the file's coordinates
   if (given.method == TriangulationMethod::Auto && upload) {
     const double faces = params.cell > 0 ? facesAtCell(*upload, params.cell) : double(params.faces);
     if (upload->isClosed() && upload->creases().edges > 0 && upload->vertexCount() < faces) {
-      bool convex = true;
       try {
-        checkConvexControl(upload->mesh());
+        polyhedron = checkConvexControl(upload->mesh());
       } catch (const Error&) {
-        convex = false;
+        polyhedron.reset();
       }
-      if (convex) {
+      if (polyhedron) {
         params.method = t.method = TriangulationMethod::Subdivision;
         t.field.clear();
-        origin = Vec3::Zero();  // the route below works in the file's coordinates, as method subdivision does
+        // The route below works in the file's coordinates, as method subdivision does: an upload read about
+        // its centre (site coordinates) is read again, as the file has it.
+        if (origin != Vec3::Zero()) polyhedron = checkConvexControl(uploadedMesh(*params.mesh));
+        origin = Vec3::Zero();
         std::ostringstream s;
         s << "the upload is a closed convex polyhedron of " << upload->vertexCount()
           << " vertices, faceted (edges turning by up to " << std::lround(upload->creases().degrees) << " degrees) and coarser than the "
@@ -815,7 +813,8 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     }
   }
   if (params.method == TriangulationMethod::Subdivision) {
-    const TriMesh control = checkConvexControl(params.mesh ? uploadedMesh(*params.mesh) : controlMesh(params.surface));
+    const TriMesh control = polyhedron ? std::move(*polyhedron)
+                                       : checkConvexControl(params.mesh ? uploadedMesh(*params.mesh) : controlMesh(params.surface));
     SubdivisionTriangulation st = subdivisionTriangulation(control, subdivisionLevels(control, params.faces, params.cell));
     t.triangulation = std::move(st.triangulation);
     t.surface = st.surface;
@@ -825,11 +824,12 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       t.origin = origin;
       if (params.start) *params.start -= origin;
       const double cellAsked = params.cell > 0 ? params.cell : cellForFaceCount(*upload, params.faces);
-      if (const int k = refinementFor(*upload, cellAsked); k > 1) {
+      const double size = triangleSize(upload->mesh());
+      if (const int k = refinementFor(*upload, size, cellAsked); k > 1) {
         const std::shared_ptr<const MeshSurface> refined = refinedUpload(upload, k);
         std::ostringstream s;
         s.precision(3);
-        s << "the uploaded mesh is coarse for this lay (its triangles' size " << triangleSize(upload->mesh())
+        s << "the uploaded mesh is coarse for this lay (its triangles' size " << size
           << " against a cell of " << cellAsked << "): ";
         // Too coarse for its fits to agree (a steep dome sampled 4 x 4, whose fits around a corner span most
         // of it): their blend would crease where the mesh does not, so the facets are laid as they are.
