@@ -786,7 +786,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
   std::shared_ptr<const MeshSurface> upload;  // read once (and kept: uploadedSurface)
   if (params.mesh && params.method != TriangulationMethod::Subdivision)
     upload = uploadedSurface(*params.mesh, t.surfaceReused, origin);
-  std::optional<TriMesh> polyhedron;  // the upload so taken, checked as a control mesh, in the file's coordinates
+  std::optional<TriMesh> polyhedron;  // the upload so taken, checked as a control mesh, in its local frame (origin)
   if (given.method == TriangulationMethod::Auto && upload) {
     const double faces = params.cell > 0 ? facesAtCell(*upload, params.cell) : double(params.faces);
     if (upload->isClosed() && upload->creases().edges > 0 && upload->vertexCount() < faces) {
@@ -798,10 +798,6 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       if (polyhedron) {
         params.method = t.method = TriangulationMethod::Subdivision;
         t.field.clear();
-        // The route below works in the file's coordinates, as method subdivision does: an upload read about
-        // its centre (site coordinates) is read again, as the file has it.
-        if (origin != Vec3::Zero()) polyhedron = checkConvexControl(uploadedMesh(*params.mesh));
-        origin = Vec3::Zero();
         std::ostringstream s;
         s << "the upload is a closed convex polyhedron of " << upload->vertexCount()
           << " vertices, faceted (edges turning by up to " << std::lround(upload->creases().degrees) << " degrees) and coarser than the "
@@ -813,8 +809,18 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     }
   }
   if (params.method == TriangulationMethod::Subdivision) {
-    const TriMesh control = polyhedron ? std::move(*polyhedron)
-                                       : checkConvexControl(params.mesh ? uploadedMesh(*params.mesh) : controlMesh(params.surface));
+    // About its centre when far from the origin, as an upload is (localOrigin): an egg control 5400 km from
+    // the origin, subdivided and solved in the file's coordinates, stalled at planarity 5e-8 (exit 2).
+    TriMesh control;
+    if (polyhedron) {
+      control = std::move(*polyhedron);
+    } else {
+      TriMesh given = params.mesh ? uploadedMesh(*params.mesh) : controlMesh(params.surface);
+      origin = localOrigin(given);
+      if (origin != Vec3::Zero()) given.V.rowwise() -= origin.transpose();
+      control = checkConvexControl(given);
+    }
+    t.origin = origin;
     SubdivisionTriangulation st = subdivisionTriangulation(control, subdivisionLevels(control, params.faces, params.cell));
     t.triangulation = std::move(st.triangulation);
     t.surface = st.surface;

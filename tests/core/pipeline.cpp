@@ -999,6 +999,36 @@ TEST_CASE("pipeline: an uploaded closed convex polyhedron coarser than the lay i
   clearUploadCache();
 }
 
+TEST_CASE("pipeline: a control mesh in site coordinates is subdivided about its centre") {
+  // The egg control 5400 km from the origin, by method subdivision and as a polyhedron under auto: in the
+  // file's coordinates the solve stalled at planarity 5e-8 (exit 2), where the egg at the origin converges.
+  // Both now compute about its centre and give the egg at the origin's mesh, moved to the site.
+  const Vec3 site(512345.678, 5432109.876, 250.0);
+  TriMesh egg = eggControl(1.5, 0.8), far = egg;
+  far.V.rowwise() += site.transpose();
+  PipelineParams p;
+  p.faces = 600;
+  p.method = TriangulationMethod::Subdivision;
+  p.mesh = objUpload(egg, "pebble");
+  const PipelineResult home = runPipeline(p);
+  REQUIRE(home.solve.converged);
+  for (const TriangulationMethod method : {TriangulationMethod::Subdivision, TriangulationMethod::Auto}) {
+    p.method = method;
+    p.mesh = objUpload(far, "pebble-on-site");
+    const PipelineResult away = runPipeline(p);
+    INFO(triangulationMethodName(method) << ": planarity " << away.metrics.planarityMax);
+    CHECK(away.method == TriangulationMethod::Subdivision);
+    const Vec3 centre = 0.5 * (egg.V.colwise().minCoeff() + egg.V.colwise().maxCoeff()).transpose();
+    CHECK((away.origin - (site + centre)).norm() < 1e-6);  // the centre of its box
+    CHECK(away.solve.converged);
+    CHECK(away.metrics.planarityMax <= 1e-9);
+    REQUIRE(away.hex.V.rows() == home.hex.V.rows());
+    CHECK(((away.hex.V.rowwise() - site.transpose()) - home.hex.V).cwiseAbs().maxCoeff() < 1e-6);
+    CHECK((triangulate(p).triangulation.mesh.V.colwise().mean().transpose() - site).norm() < 1);
+  }
+  clearUploadCache();
+}
+
 TEST_CASE("pipeline: a vertex filled in on a closed row stays between its neighbours") {
   // A torus sampled 24 x 12, refined, at 1000 faces (cells of 0.27): a closed row's missing apex was filled in
   // at the middle of the arc between its neighbours, whose arcs had come out a hair in the wrong order, so on
