@@ -9,7 +9,7 @@
 #include <limits>
 #include <optional>
 
-#include <Eigen/SparseCholesky>
+#include <Eigen/IterativeLinearSolvers>
 
 #include "phex/error.hpp"
 #include "phex/metrics.hpp"
@@ -690,8 +690,6 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(9 * static_cast<std::size_t>(nv) + nf);
   constexpr int kRounds = 2;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
-  bool analysed = false;
   // Where the shifts fold faces the whole fit used to be dropped. Now the shifts of the faces around the
   // folded ones are undone first (no solve: any shifts keep the faces planar); where the farthest node is
   // right there the fit stops, else the folded faces (from the second time on also the faces at their
@@ -763,13 +761,12 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
       }
       Eigen::SparseMatrix<double> JtJ(nf, nf);
       JtJ.setFromTriplets(triplets.begin(), triplets.end());
-      // A direct solve. Frozen faces keep their entries (as zeros), so every round and attempt has the same
-      // pattern, ordered and analysed once. Conjugate gradients to 1e-6 took about 200 iterations here, 20 ms
-      // a solve against 11 ms a factorization on the uploaded bumps at 10k faces (8 solves).
-      if (!analysed) ldlt.analyzePattern(JtJ), analysed = true;
-      ldlt.factorize(JtJ);
-      if (ldlt.info() != Eigen::Success) break;
-      Eigen::VectorXd step = ldlt.solve(rhs);
+      Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg(JtJ);
+      // Tight enough that where the iterations stop (which round-off can shift by one between native code
+      // and WebAssembly) moves no vertex by more than round-off.
+      cg.setTolerance(1e-6);
+      cg.setMaxIterations(300);
+      Eigen::VectorXd step = cg.solve(rhs);
       if (!step.allFinite()) break;
       for (int f = 0; f < nf; ++f)
         if (frozen[f]) step[f] = 0;
