@@ -390,6 +390,9 @@ function setUpload(value) {
   $('mesh-name').textContent = upload ? `Mesh: ${upload.name} (${(upload.bytes.length / 1024).toFixed(0)} kB)` : '';
   $('surface').disabled = Boolean(upload);
   $('surface-params').disabled = Boolean(upload);
+  // The analytic surface's description and parameters do not apply to an upload: hidden while one is loaded.
+  $('surface-description').hidden = Boolean(upload);
+  $('surface-params').hidden = Boolean(upload);
 }
 
 async function openFile(file) {

@@ -258,7 +258,12 @@ test('an uploaded OBJ mesh is tiled', async (t) => {
   assert.equal(await page.getAttribute('body', 'data-state'), 'ready', await page.textContent('#error'));
   assert.match(await page.textContent('#mesh-name'), /torus-patch\.obj/);
   assert.ok(Number(await page.textContent('#face-count')) > 50);
+  // The analytic surface's description and parameters are hidden while the upload is what is tiled.
+  assert.equal(await page.isVisible('#surface-description'), false);
+  assert.equal(await page.isVisible('#surface-params'), false);
   await afterRun(() => page.click('#mesh-clear'));
+  assert.equal(await page.isVisible('#surface-description'), true);
+  assert.equal(await page.isVisible('#surface-params'), true);
 });
 
 test('an upload in site coordinates, far from the origin, is drawn as at the origin', async (t) => {
