@@ -356,10 +356,11 @@ TEST_CASE("pipeline: on a surface laid in several systems, every face only foldi
   CHECK(r.interiorFacesSplit > 8);  // more than the few cut on a surface of one system
   CHECK(r.interiorFacesSplit < 0.05 * r.hex.faceCount());
   CHECK(r.interiorHexagonFraction > 0.7);
-  // The surface fit folds 43 faces at first; shorter shifts of every plane fold none and are kept: 0.193 % of
-  // the diagonal. This coarse the goal is met narrowly: at 800, 900, 1050, 1200 and 1500 faces the bumps'
-  // panels stay 0.23-0.29 % off, the farthest node where the shifts fold faces (see the README).
-  CHECK(r.solve.surfaceFitted);
+  // This coarse the distance goal is met narrowly: 0.161 % of the diagonal (at 800, 900, 1050, 1200 and 1500
+  // faces the bumps' panels stay 0.23-0.29 % off, the farthest node where the surface fit's shifts fold faces;
+  // see the README). Whether the fit applies here turns on round-off: which faces are cut depends on their
+  // planarity against 1/100 of the worst (kCutBelowWorst), and native code cuts 12 interior faces, whose mesh
+  // the fit brings from 0.164 % to 0.161 %, where WebAssembly cuts 14, whose mesh is at 0.161 % unfitted.
   CHECK(r.metrics.surfaceDistanceMax <= 0.002);
   p.splitBoundaryPanels = false;
   const PipelineResult whole = runPipeline(p);
