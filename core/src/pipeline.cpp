@@ -793,7 +793,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       try {
         polyhedron = checkConvexControl(upload->mesh());
       } catch (const Error&) {
-        polyhedron.reset();
+        // not a convex control mesh: laid as an upload (polyhedron stays empty)
       }
       if (polyhedron) {
         params.method = t.method = TriangulationMethod::Subdivision;
@@ -1143,11 +1143,13 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
   const std::size_t uncut = facesBeforeCuts(r);
   const std::size_t cutSoFar = static_cast<std::size_t>(r.interiorFacesSplit);
   std::vector<char> cut(r.hex.faceCount(), 0), crossing(r.hex.faceCount(), 0), held(r.hex.V.rows(), 0);
+  std::vector<double> planarity(r.hex.faceCount());
   std::vector<int> interiorOff;
   int count = 0;
   bool offPlanarCut = false;
   for (int f = 0; f < r.hex.faceCount(); ++f) {
-    const bool offPlanar = facePlanarity(r.hex, f) > tolerance;
+    planarity[f] = facePlanarity(r.hex, f);
+    const bool offPlanar = planarity[f] > tolerance;
     const bool boundaryPanel = r.dual.boundaryFace[f] && r.hex.faceSize(f) >= 4;
     // So is an interior face the dual left crossing itself (untangleDual could not mend it): the solve never
     // unfolds it, and cut it may become two simple pieces.
@@ -1181,9 +1183,9 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
   } else if (away || (seams && few && !interiorOff.empty())) {
     // Faces far nearer planar than the worst are left to the next solve (kCutBelowWorst).
     double worst = 0;
-    for (int f : interiorOff) worst = std::max(worst, facePlanarity(r.hex, f));
+    for (int f : interiorOff) worst = std::max(worst, planarity[f]);
     for (int f : interiorOff)
-      if (crossing[f] || facePlanarity(r.hex, f) >= kCutBelowWorst * worst) cut[f] = 1, ++interior;
+      if (crossing[f] || planarity[f] >= kCutBelowWorst * worst) cut[f] = 1, ++interior;
     stalledRule = !seams && interiorOff.size() > fewOff;
   }
   // An interior face crossing itself is cut whatever else is: the solve never unfolds it. (Next to a cut
