@@ -631,8 +631,9 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
   // at 1500 faces: 0.182 % -> 0.203 %), so it is the last try, where the others leave the mesh past the goal.
   const bool trianglesFree = mode.trianglesFree;
   const FacesAtVertices at = facesAtVertices(mesh, [&](int f) { return !trianglesFree || mesh.faceSize(f) > 3; });
-  std::vector<Vec3> triangleStart(nf, Vec3::Zero());  // each triangle's (doubled) area vector as the fit starts
-  for (int f = 0; f < nf; ++f)
+  // Each triangle's (doubled) area vector as the fit starts, where triangles are free.
+  std::vector<Vec3> triangleStart(trianglesFree ? nf : 0, Vec3::Zero());
+  for (int f = 0; f < static_cast<int>(triangleStart.size()); ++f)
     if (mesh.faceSize(f) == 3) triangleStart[f] = triangleNormal(mesh, f);
   // A polygon crossing itself, or a triangle turned over or collapsed (under a sixteenth of its area along the
   // way it faced as the fit started).

@@ -357,9 +357,10 @@ TEST_CASE("pipeline: on a surface laid in several systems, every face only foldi
   CHECK(r.interiorFacesSplit < 0.05 * r.hex.faceCount());
   CHECK(r.interiorHexagonFraction > 0.7);
   // This coarse the distance goal is met narrowly: 0.161 % of the diagonal (at 800 faces the bumps' panels
-  // stay 0.203 % off, the farthest node where the surface fit's shifts fold faces; see the README). Whether the fit applies here turns on round-off: which faces are cut depends on their
-  // planarity against 1/100 of the worst (kCutBelowWorst), and native code cuts 12 interior faces, whose mesh
-  // the fit brings from 0.164 % to 0.161 %, where WebAssembly cuts 14, whose mesh is at 0.161 % unfitted.
+  // stay 0.203 % off, the farthest node where the surface fit's shifts fold faces; see the README). Whether
+  // the fit applies here turns on round-off: which faces are cut depends on their planarity against 1/100 of
+  // the worst (kCutBelowWorst), and native code cuts 12 interior faces, whose mesh the fit brings from 0.164 %
+  // to 0.161 %, where WebAssembly cuts 14, whose mesh is at 0.161 % unfitted.
   CHECK(r.metrics.surfaceDistanceMax <= 0.002);
   p.splitBoundaryPanels = false;
   const PipelineResult whole = runPipeline(p);
