@@ -208,7 +208,7 @@ TEST_CASE("pipeline: method auto tiles every analytic surface validly (the free-
     INFO("invalid stars " << r.check.invalidStars.size() << ", valence 6 " << r.check.regularFraction << ", coverage "
                           << r.check.coverage << ", self-intersecting " << r.metrics.selfIntersectingCount);
     if (spec.name == "freeform") {
-      // Known shortfall: umbilics on its bump tops and parabolic rings around them (see the README); faces
+      // Known shortfall: umbilics on its bump tops and parabolic rings around them (docs/METHOD.md); faces
       // across the rings reach planarity only by folding, which the solver prevents by default.
       CHECK(r.check.invalidStars.size() <= 0.01 * r.check.interiorVertices);
       CHECK(r.metrics.selfIntersectingCount <= 0.01 * r.metrics.faceCount);
@@ -357,7 +357,7 @@ TEST_CASE("pipeline: on a surface laid in several systems, every face only foldi
   CHECK(r.interiorFacesSplit < 0.05 * r.hex.faceCount());
   CHECK(r.interiorHexagonFraction > 0.7);
   // This coarse the distance goal is met narrowly: 0.161 % of the diagonal (at 800 faces the bumps' panels
-  // stay 0.203 % off, the farthest node where the surface fit's shifts fold faces; see the README). Whether
+  // stay 0.203 % off, the farthest node where the surface fit's shifts fold faces; docs/METHOD.md). Whether
   // the fit applies here turns on round-off: which faces are cut depends on their planarity against 1/100 of
   // the worst (kCutBelowWorst), and native code cuts 12 interior faces, whose mesh the fit brings from 0.164 %
   // to 0.161 %, where WebAssembly cuts 14, whose mesh is at 0.161 % unfitted.
