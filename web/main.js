@@ -275,6 +275,22 @@ function showNotes(notes) {
   $('run-notes').hidden = notes.length === 0;
 }
 
+/** Nodes by the number of faces at them ("3: 1200 · 4: 2"), those of more than three marked: nodes of more beams. */
+function nodeFaces(valence) {
+  if (!valence) return '–';
+  const entries = Object.entries(valence).sort(([a], [b]) => Number(a) - Number(b));
+  const over = entries.filter(([faces]) => Number(faces) > 3).reduce((sum, [, count]) => sum + count, 0);
+  return `${entries.map(([faces, count]) => `${faces}: ${count}`).join(' · ')}${over ? ` (${over} of more than 3)` : ''}`;
+}
+
+/** "min – max (×max/min)" in model units, the mean in the tooltip of element `id`. */
+function showSpread(id, min, mean, max) {
+  const ok = [min, mean, max].every(Number.isFinite);
+  const ratio = ok && min > 0 ? ` (×${(max / min).toFixed(1)})` : '';
+  $(id).textContent = ok ? `${min.toPrecision(3)} – ${max.toPrecision(3)}${ratio}` : '–';
+  $(id).title = ok ? `mean ${mean.toPrecision(3)}` : '';
+}
+
 function showStats({ metrics, solve, timings, method, field, triangulation, duality }) {
   showNotes(triangulation?.notes ?? []);
   const invalidStars = triangulation?.check?.invalidStars?.length;
@@ -285,8 +301,17 @@ function showStats({ metrics, solve, timings, method, field, triangulation, dual
   $('faces-by-size').textContent = Object.entries(metrics.facesBySize)
     .map(([size, count]) => `${size}-gons ${count}`)
     .join(', ');
+  $('hexagon-share').textContent = Number.isFinite(metrics.interiorHexagonFraction)
+    ? `${(100 * metrics.interiorHexagonFraction).toFixed(1)} %`
+    : '–';
+  $('node-faces').textContent = nodeFaces(metrics.vertexValence);
   $('planarity-max').textContent = fmt(metrics.planarityMax);
   $('planarity-mean').textContent = fmt(metrics.planarityMean);
+  $('planarity-diagonals').textContent = metrics.planarityDiagonals?.length
+    ? `${fmt(metrics.planarityDiagonals.reduce((a, b) => Math.max(a, b), 0))} % max`
+    : '–';
+  showSpread('edge-length', metrics.edgeLengthMin, metrics.edgeLengthMean, metrics.edgeLengthMax);
+  showSpread('face-area', metrics.faceAreaMin, metrics.faceAreaMean, metrics.faceAreaMax);
   $('invalid-faces').textContent = String(metrics.selfIntersectingCount);
   $('convexity-mismatch').textContent =
     metrics.convexityMismatchCount === undefined

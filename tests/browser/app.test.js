@@ -75,6 +75,15 @@ test('the default torus is computed and drawn on load', async () => {
   assert.ok(Number(await page.textContent('#face-count')) > 1000);
   assert.equal(await page.textContent('#invalid-faces'), '0');
   assert.equal(await page.inputValue('#surface'), 'torus');
+  // The summaries of the metrics: hexagons, faces at nodes (3 at every node of the closed torus), the
+  // diagonal planarity measure and the spreads of edge length and face area.
+  assert.ok(Number.parseFloat(await page.textContent('#hexagon-share')) >= 90, await page.textContent('#hexagon-share'));
+  assert.match(await page.textContent('#node-faces'), /^3: \d+$/);
+  assert.match(await page.textContent('#planarity-diagonals'), /^\S+ % max$/);
+  for (const id of ['#edge-length', '#face-area']) {
+    assert.match(await page.textContent(id), /^\S+ – \S+ \(×\d+\.\d\)$/, id);
+    assert.match(await page.getAttribute(id, 'title'), /^mean \S+$/, id);
+  }
 
   const png = await page.locator('#viewport').screenshot();
   mkdirSync(artifacts, { recursive: true });
