@@ -50,19 +50,23 @@ const isMesh = (c) => c.surface.endsWith('.obj');
 const repeatOf = (c) => (c.faces <= 10000 ? Number(process.env.PHEX_BENCH_REPEAT ?? 5) : 1);
 const median = (runs) => [...runs].sort((a, b) => a.milliseconds.total - b.milliseconds.total)[(runs.length - 1) >> 1];
 
-function native(c) {
-  if (c.faces > 10000) return nativeOnce(c);
-  const first = nativeOnce(c);
+// Natively phex splits independent work over the machine's threads (at most 8; `threads`: 0); wasm runs on
+// one. The local solver's cases run natively on one thread as well, so that wasm/native also compares the
+// same work on one thread.
+function native(c, threads = 0) {
+  if (c.faces > 10000) return nativeOnce(c, threads);
+  const first = nativeOnce(c, threads);
   if (first.error || first.milliseconds.total > 2000) return first;  // long runs scatter little: once
-  const runs = Array.from({ length: repeatOf(c) }, () => nativeOnce(c));
+  const runs = Array.from({ length: repeatOf(c) }, () => nativeOnce(c, threads));
   const failed = runs.find((r) => r.error);
   return failed ?? { ...median(runs), totals: runs.map((r) => r.milliseconds.total) };
 }
 
-function nativeOnce(c) {
+function nativeOnce(c, threads) {
   const report = join(scratch, 'r.json');
   const input = isMesh(c) ? ['--mesh', meshFiles[c.surface]] : ['--surface', c.surface];
-  const args = ['run', ...input, '--faces', String(c.faces), '--solver', c.solver, '--duality', dualityOf(c), '--report', report, '--quiet'];
+  const args = ['run', ...input, '--faces', String(c.faces), '--solver', c.solver, '--duality', dualityOf(c),
+    '--threads', String(threads), '--report', report, '--quiet'];
   const started = performance.now();
   const p = spawnSync(cli, args, { encoding: 'utf8' });
   const wall = performance.now() - started;
@@ -71,7 +75,7 @@ function nativeOnce(c) {
   return {
     faces: r.mesh.faces, milliseconds: { ...r.milliseconds, wall }, iterations: r.solver.iterations,
     planarityMax: r.planarity.max, invalidFaces: r.invalidFaces, surfaceDistanceMax: r.surfaceDistance.max,
-    peakMemoryMB: r.peakMemoryMB, duality: r.dualityUsed,
+    peakMemoryMB: r.peakMemoryMB, duality: r.dualityUsed, threads: r.threads,
   };
 }
 
@@ -94,15 +98,18 @@ function wasm(c) {
 const fmt = (x, d = 0) => (x === undefined ? '—' : Number(x).toFixed(d));
 const sci = (x) => (x === undefined ? '—' : Number(x).toExponential(1));
 const rows = [];
-console.log('| surface | faces | solver | where | triangulate | dualize | planarize | measure | total ms | iterations | planarity | invalid | distance/diag | peak MB | wasm/native | wasm first run ms |');
+console.log('| surface | faces | solver | where | triangulate | dualize | planarize | measure | total ms | iterations | planarity | invalid | distance/diag | peak MB | wasm/native (1 thread) | wasm first run ms |');
 console.log('|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|');
 for (const c of cases) {
-  const n = native(c), w = wasm(c);
-  rows.push({ ...c, native: n, wasm: w });
-  for (const [where, r] of [['native', n], ['wasm', w]]) {
+  const n = native(c), one = c.solver === 'local' ? native(c, 1) : undefined, w = wasm(c);
+  rows.push({ ...c, native: n, ...(one ? { native1: one } : {}), wasm: w });
+  const sides = [[`native, ${n.threads ?? '?'} threads`, n], ...(one && n.threads !== 1 ? [['native, 1 thread', one]] : []), ['wasm', w]];
+  for (const [where, r] of sides) {
     if (r.error) { console.log(`| ${c.surface} | ${c.faces} | ${c.solver} | ${where} | error: ${r.error} |`); continue; }
     const ms = r.milliseconds;
-    const ratio = where === 'wasm' && !n.error ? fmt(ms.total / n.milliseconds.total, 2) : '';
+    // wasm against native as users get it, and (in brackets) against native on one thread.
+    const against = (m) => (m && !m.error ? fmt(ms.total / m.milliseconds.total, 2) : undefined);
+    const ratio = where === 'wasm' ? [against(n), one && n.threads !== 1 ? `(${against(one)})` : ''].filter(Boolean).join(' ') : '';
     console.log(`| ${c.surface} | ${r.faces} | ${c.solver} | ${where} | ${fmt(ms.triangulate)} | ${fmt(ms.dualize)} | ${fmt(ms.planarize)} | ${fmt(ms.measure)} | ${fmt(ms.total)} | ${r.iterations}${r.duality === 'tangent' ? ' (tangent)' : ''} | ${sci(r.planarityMax)} | ${r.invalidFaces} | ${sci(r.surfaceDistanceMax)} | ${fmt(r.peakMemoryMB)} | ${ratio} | ${where === 'wasm' ? fmt(r.firstTotal) : ''} |`);
   }
 }

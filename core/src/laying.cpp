@@ -15,6 +15,7 @@
 #include "phex/error.hpp"
 #include "phex/ideal_triangle.hpp"
 #include "phex/mesh_surface.hpp"
+#include "phex/parallel.hpp"
 
 namespace phex {
 namespace {
@@ -97,6 +98,7 @@ constexpr double kBoundaryCrossing = 0.8;
 // midpoint, which on an uploaded mesh's jagged boundary polyline could fall several mesh edges off the mesh.
 constexpr double kChordOffBoundary = 0.01;
 constexpr double kEllLength = 3.0;    // Method 2 traces each l_i this many ideal steps long
+constexpr int kEllsPerThread = 16;   // the l_i of a row traced per thread, at least
 constexpr double kEllFirst = 1.5;     // ... at first only this many: further where no crossing is found
 constexpr int kParabolicSamples = 400;  // samples of the surface that vote for the base family at parabolic curves
 // Method 1 smooths its apex offsets once per layer at about this many faces, more often at finer cells (see
@@ -863,11 +865,20 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
     if (!d) continue;  // a singularity of D_G: no apex here
     toBoundary[i] = onBoundary_[row.ids[i]] || onBoundary_[row.ids[(i + 1) % row.ids.size()]];
     ells[i].emplace(field_, G_, s.M, *d, kEllLength * (toBoundary[i] ? std::max(s.step, meanStep) : s.step), false);
-    // Past the step (strictly), so that whether l_i is longer than the step is known.
-    if (recordConjugateLines) ells[i]->finish();
-    else ells[i]->advance(std::nextafter(kEllFirst * s.step, std::numeric_limits<double>::infinity()));
+  }
+  // Each l_i on its own (over threads), past the step (strictly), so that whether it is longer than the step is
+  // known.
+  parallelRanges(n, kEllsPerThread, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i) {
+      if (!ells[i]) continue;
+      if (recordConjugateLines) ells[i]->finish();
+      else ells[i]->advance(std::nextafter(kEllFirst * segments[i].step, std::numeric_limits<double>::infinity()));
+    }
+  });
+  for (int i = 0; i < n; ++i) {
+    if (!ells[i]) continue;
     updateArcs(i);
-    if (ells[i]->line().length > s.step && (middle < 0 || std::abs(i - n / 2) < std::abs(middle - n / 2))) middle = i;
+    if (ells[i]->line().length > segments[i].step && (middle < 0 || std::abs(i - n / 2) < std::abs(middle - n / 2))) middle = i;
     if (recordConjugateLines) {
       std::vector<Vec3> line;
       for (const SurfacePoint& p : ells[i]->line().points) line.push_back(p.point());
@@ -902,13 +913,22 @@ std::vector<std::optional<Apex>> Laying::prespecifiedApexes(const Row& row, cons
   for (int iteration = 0; iteration < 6; ++iteration) {
     s0 = std::min(s0, ellMiddle.length);
     const SurfacePoint start = pointAtArc(walker_, ellMiddle.points, ellArcs[middle], false, ellMiddle.length, s0);
-    const FlowLine forward = traceFlowLine(field_, F_, start, rowDirection, 1.5 * rowAhead + 4 * o_.cell, row.closed);
+    // With threads to spare the backward line is traced beside the forward one, and used where that does not close.
+    FlowLine forward, backward;
+    const bool both = threadCount() > 1;
+    auto traceBackward = [&] {
+      backward = traceFlowLine(field_, F_, start, -rowDirection, 1.5 * rowBehind + 4 * o_.cell, false);
+    };
+    parallelTasks(both ? 2 : 1, [&](int k) {
+      if (k == 1) return traceBackward();
+      forward = traceFlowLine(field_, F_, start, rowDirection, 1.5 * rowAhead + 4 * o_.cell, row.closed);
+    });
     next = Row{};
     if (forward.end == FlowLine::End::Closed) {
       next.closed = true;
       next.curve = forward.points;
     } else {
-      const FlowLine backward = traceFlowLine(field_, F_, start, -rowDirection, 1.5 * rowBehind + 4 * o_.cell, false);
+      if (!both) traceBackward();
       next.curve.assign(backward.points.rbegin(), backward.points.rend());
       next.curve.insert(next.curve.end(), forward.points.begin() + 1, forward.points.end());
     }

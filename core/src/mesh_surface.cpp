@@ -10,9 +10,13 @@
 
 #include "phex/dupin.hpp"
 #include "phex/error.hpp"
+#include "phex/parallel.hpp"
 
 namespace phex {
 namespace {
+
+// The jet fits split over threads in ranges of at least this many vertices.
+constexpr int kVerticesPerThread = 2000;
 
 [[noreturn]] void fail(const std::string& name, const std::string& what) {
   throw Error(ErrorCode::InvalidInput, "mesh '" + name + "': " + what);
@@ -597,12 +601,14 @@ TriMesh MeshSurface::refined(int k) const {
                                                  std::to_string(k) + " would exceed " +
                                                  std::to_string(kMaxRefinedTriangles) + " triangles");
   const std::vector<Vec3> trial = trialNormals();
-  FitScratch scratch(nv);
   std::vector<VertexFit> jets(nv);
   // Over two rings whatever noise() says: a coarse mesh's fits miss its vertices because the surface turns
   // much within two rings, not because they are scattered (a torus sampled 24 x 12 counted as noisy, and
   // its fits over 4 rings, spanning a third of its tube, blended into a surface far off it).
-  for (int v = 0; v < nv; ++v) jets[v] = fitVertex(v, 2, trial[v], scratch);
+  parallelRanges(nv, kVerticesPerThread, [&](int begin, int end) {
+    FitScratch scratch(nv);
+    for (int v = begin; v < end; ++v) jets[v] = fitVertex(v, 2, trial[v], scratch);
+  });
   // x projected onto vertex v's jet (through the vertex: its constant term left out).
   auto onJet = [&](int v, const Vec3& x) -> Vec3 {
     const VertexFit& j = jets[v];
@@ -687,14 +693,16 @@ double MeshSurface::estimateCurvature(int minRings) {
   const std::vector<Vec3> trialNormal = trialNormals();
   vertexGeometry_.resize(nv);
   shapeTensor_.resize(nv);
-  FitScratch scratch(nv);
   std::vector<double> residual(nv, 0.0);
-  for (int v = 0; v < nv; ++v) {
-    const VertexFit fit = fitVertex(v, minRings, trialNormal[v], scratch);
-    residual[v] = fit.residual;
-    shapeTensor_[v] = fit.tensor;
-    vertexGeometry_[v] = principalFrame(mesh_.V.row(v).transpose(), fit.normal, fit.tensor);
-  }
+  parallelRanges(nv, kVerticesPerThread, [&](int begin, int end) {
+    FitScratch scratch(nv);
+    for (int v = begin; v < end; ++v) {
+      const VertexFit fit = fitVertex(v, minRings, trialNormal[v], scratch);
+      residual[v] = fit.residual;
+      shapeTensor_[v] = fit.tensor;
+      vertexGeometry_[v] = principalFrame(mesh_.V.row(v).transpose(), fit.normal, fit.tensor);
+    }
+  });
   if (nv == 0) return 0;
   std::nth_element(residual.begin(), residual.begin() + nv / 2, residual.end());
   return residual[nv / 2];

@@ -5,8 +5,13 @@
 #include <cmath>
 #include <limits>
 
+#include "phex/parallel.hpp"
+
 namespace phex {
 namespace {
+
+// Faces or vertices measured per thread, at least.
+constexpr int kItemsPerThread = 2000;
 
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
@@ -229,28 +234,55 @@ MeshMetrics measureAll(const PolyMesh& mesh, const Surface* surface) {
     const double diagonal = surface->bounds().diagonal().norm();
     m.surfaceDistance.resize(m.vertexCount);
     vertexSign.resize(m.vertexCount);
+    parallelRanges(m.vertexCount, kItemsPerThread, [&](int begin, int end) {
+      for (int v = begin; v < end; ++v) {
+        const Vec3 p = mesh.vertex(v);
+        const LocalGeometry g = surface->closestPoint(p);
+        m.surfaceDistance[v] = (g.point - p).norm() / diagonal;
+        const double K = g.gaussianCurvature();
+        vertexSign[v] = static_cast<signed char>(K > 0 ? 1 : K < 0 ? -1 : 0);
+      }
+    });
     double distanceSum = 0;
     for (int v = 0; v < m.vertexCount; ++v) {
-      const Vec3 p = mesh.vertex(v);
-      const LocalGeometry g = surface->closestPoint(p);
-      m.surfaceDistance[v] = (g.point - p).norm() / diagonal;
       m.surfaceDistanceMax = std::max(m.surfaceDistanceMax, m.surfaceDistance[v]);
       distanceSum += m.surfaceDistance[v];
-      const double K = g.gaussianCurvature();
-      vertexSign[v] = static_cast<signed char>(K > 0 ? 1 : K < 0 ? -1 : 0);
     }
     m.surfaceDistanceMean = m.vertexCount ? distanceSum / m.vertexCount : 0.0;
   }
-  std::vector<Vec2> corners;
+  // Each face on its own (over threads); the sums after, in face order. `shape`: 1 elliptic, -1 hyperbolic, 0
+  // parabolic at the face's scale, 2 across a parabolic curve (or no surface).
+  std::vector<signed char> shape(m.faceCount, 0);
+  parallelRanges(m.faceCount, kItemsPerThread, [&](int begin, int end) {
+    std::vector<Vec2> corners;
+    for (int f = begin; f < end; ++f) {
+      // The face's plane, its corners in it and whether they cross: each computed once, shared by the measures.
+      const FacePlane plane = leastSquaresPlane(mesh, f);
+      planarCorners(mesh, f, plane, corners);
+      m.planarity[f] = planarityAgainst(mesh, f, plane);
+      m.planarityDiagonals[f] = facePlanarityDiagonals(mesh, f);
+      m.selfIntersecting[f] = polygonSelfIntersects(corners) ? 1 : 0;
+      m.convex[f] = isConvex(corners, m.selfIntersecting[f] != 0) ? 1 : 0;
+      m.faceArea[f] = std::abs(signedArea(corners));
+      if (!surface) continue;
+      const LocalGeometry g = surface->closestPoint(plane.centroid);
+      const double h = std::sqrt(m.faceArea[f]);
+      // Parabolic at the face's scale: the indicatrix says nothing about its shape (§3).
+      if (std::abs(g.k2) * h < 1e-3 || std::abs(g.k1) * h < 1e-3) continue;
+      const bool elliptic = g.gaussianCurvature() > 0;
+      // Across a parabolic curve (§6 step 1: the signs of K at the corners differ) neither shape is called for.
+      bool across = false;
+      for (int i = 0; i < mesh.faceSize(f); ++i) across |= vertexSign[mesh.face(f)[i]] != (elliptic ? 1 : -1);
+      if (across) {
+        shape[f] = 2;
+        continue;
+      }
+      shape[f] = elliptic ? 1 : -1;
+      m.convexityMismatch[f] = (m.convex[f] != 0) != elliptic && !m.selfIntersecting[f];
+      m.regularity[f] = affineRegularityDefect(corners, !elliptic);
+    }
+  });
   for (int f = 0; f < m.faceCount; ++f) {
-    // The face's plane, its corners in it and whether they cross: each computed once, shared by the measures.
-    const FacePlane plane = leastSquaresPlane(mesh, f);
-    planarCorners(mesh, f, plane, corners);
-    m.planarity[f] = planarityAgainst(mesh, f, plane);
-    m.planarityDiagonals[f] = facePlanarityDiagonals(mesh, f);
-    m.selfIntersecting[f] = polygonSelfIntersects(corners) ? 1 : 0;
-    m.convex[f] = isConvex(corners, m.selfIntersecting[f] != 0) ? 1 : 0;
-    m.faceArea[f] = std::abs(signedArea(corners));
     m.faceAreaMin = std::min(m.faceAreaMin, m.faceArea[f]);
     m.faceAreaMax = std::max(m.faceAreaMax, m.faceArea[f]);
     areaSum += m.faceArea[f];
@@ -267,22 +299,9 @@ MeshMetrics measureAll(const PolyMesh& mesh, const Surface* surface) {
     m.planarityMax = std::max(m.planarityMax, m.planarity[f]);
     sum += m.planarity[f];
     m.selfIntersectingCount += m.selfIntersecting[f];
-    if (!surface) continue;
-    const LocalGeometry g = surface->closestPoint(plane.centroid);
-    const double h = std::sqrt(m.faceArea[f]);
-    // Parabolic at the face's scale: the indicatrix says nothing about its shape (§3).
-    if (std::abs(g.k2) * h < 1e-3 || std::abs(g.k1) * h < 1e-3) continue;
-    const bool elliptic = g.gaussianCurvature() > 0;
-    // Across a parabolic curve (§6 step 1: the signs of K at the corners differ) neither shape is called for.
-    bool across = false;
-    for (int i = 0; i < mesh.faceSize(f); ++i) across |= vertexSign[mesh.face(f)[i]] != (elliptic ? 1 : -1);
-    if (across) {
-      ++m.parabolicFaceCount;
-      continue;
-    }
-    m.convexityMismatch[f] = (m.convex[f] != 0) != elliptic && !m.selfIntersecting[f];
+    if (shape[f] == 2) ++m.parabolicFaceCount;
+    if (shape[f] != 1 && shape[f] != -1) continue;
     m.convexityMismatchCount += m.convexityMismatch[f];
-    m.regularity[f] = affineRegularityDefect(corners, !elliptic);
     if (m.regularity[f] >= 0) regularitySum += m.regularity[f], ++regularityCount;
   }
   for (int c : facesAtVertex) m.vertexValence[c]++;

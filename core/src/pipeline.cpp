@@ -19,6 +19,7 @@
 #include "phex/mesh_io.hpp"
 #include "phex/mesh_surface.hpp"
 #include "phex/metrics.hpp"
+#include "phex/parallel.hpp"
 #include "phex/subdivision.hpp"
 
 namespace phex {
@@ -518,10 +519,11 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
     int systems;
     double regular;  // the share of interior vertices of valence 6
   };
-  auto score = [&](Triangulation* keep = nullptr) -> std::optional<Trial> {
+  // Thread-safe: `o` is the caller's own (parallelTasks runs several at once).
+  auto score = [&](const LayingOptions& o, Triangulation* keep = nullptr) -> std::optional<Trial> {
     Triangulation t;
     try {
-      t = layTriangulation(surface, trial, {}, cancel);
+      t = layTriangulation(surface, o, {}, cancel);
     } catch (const Error& e) {
       if (e.code() == ErrorCode::Cancelled) throw;
       return std::nullopt;  // this start cannot be laid from; the others may
@@ -553,22 +555,49 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
     double rank = score;  // the score less the price of irregular vertices
     double regular = 0;
   };
-  // The trial lay from `c`, less the handicap of a start other than the middle of the bounds, or nullopt.
-  auto trialFrom = [&](const Vec3& c) -> std::optional<Best> {
-    trial.start = c;
-    const auto s = score();
-    if (!s) return std::nullopt;
-    ++laid;
-    const double handicap = c == candidates.front() ? 0.0 : 0.05;
-    return Best{c, s->plain - handicap, s->vertices, s->systems, s->rank - handicap, s->regular};
+  // The trial lays from `starts` along `base`, laid at once (parallelTasks), each less the handicap of a start
+  // other than the middle of the bounds; nullopt where one cannot be laid.
+  auto trialsFrom = [&](const std::vector<Vec3>& starts, BaseFamily base) {
+    std::vector<std::optional<Best>> trials(starts.size());
+    parallelTasks(static_cast<int>(starts.size()), [&](int i) {
+      LayingOptions o = trial;
+      o.start = starts[i];
+      o.base = base;
+      const auto s = score(o);
+      if (!s) return;
+      const double handicap = starts[i] == candidates.front() ? 0.0 : 0.05;
+      trials[i] = Best{starts[i], s->plain - handicap, s->vertices, s->systems, s->rank - handicap, s->regular};
+    });
+    return trials;
   };
-  auto bestStart = [&]() {
+  // The best of the first `count` trials, in order (the first of equal scores), counting those laid.
+  auto bestOf = [&](const std::vector<std::optional<Best>>& trials, std::size_t count) {
     Best b;
-    for (const Vec3& c : candidates)
-      if (const std::optional<Best> t = trialFrom(c); t && t->score > b.score) b = *t;
+    for (std::size_t i = 0; i < count; ++i) {
+      if (!trials[i]) continue;
+      ++laid;
+      if (trials[i]->score > b.score) b = *trials[i];
+    }
     return b;
   };
-  Best best = bestStart();
+  // The start on a parabolic curve (below) is a candidate only where the best of the others took one system
+  // of rows; with threads to spare it is laid along with them, and its lay used only then.
+  std::optional<Vec3> parabolic;
+  if (options.method == LayingMethod::Prespecified &&
+      most.gaussianCurvature() - least.gaussianCurvature() > 0) {  // not a developable, parabolic throughout
+    double lowest = kParabolicStart;
+    for (const LocalGeometry& g : surface.samples(kParabolicStartSamples)) {
+      const double a = std::abs(g.k1), b = std::abs(g.k2), kmax = std::max(a, b);
+      if (!(kmax > 0)) continue;
+      const double ratio = std::min(a, b) / kmax;
+      if (ratio < lowest) lowest = ratio, parabolic = g.point;
+    }
+  }
+  std::vector<Vec3> starts = candidates;
+  const bool ahead = parabolic && threadCount() > 1;
+  if (ahead) starts.push_back(*parabolic);
+  std::vector<std::optional<Best>> trials = trialsFrom(starts, trial.base);
+  Best best = bestOf(trials, candidates.size());
   const bool poor = best.score < kPoorTrial;
   // The start on a parabolic curve replaces the best where it ranks higher with the price of irregular
   // vertices. Not on the bumps, whose lays take several systems of rows from every start (one from their
@@ -578,17 +607,10 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
   // other candidates are still ranked as before: ranked by irregular vertices too, the uploaded cyclide at
   // 1500 faces started from its outer equator instead, with 96 % hexagons for 91 % but its farthest node at
   // 0.38 % of the diagonal for 0.14 %.
-  if (best.systems == 1 && options.method == LayingMethod::Prespecified &&
-      most.gaussianCurvature() - least.gaussianCurvature() > 0) {  // not a developable, parabolic throughout
-    std::optional<Vec3> parabolic;
-    double lowest = kParabolicStart;
-    for (const LocalGeometry& g : surface.samples(kParabolicStartSamples)) {
-      const double a = std::abs(g.k1), b = std::abs(g.k2), kmax = std::max(a, b);
-      if (!(kmax > 0)) continue;
-      const double ratio = std::min(a, b) / kmax;
-      if (ratio < lowest) lowest = ratio, parabolic = g.point;
-    }
-    const std::optional<Best> there = parabolic ? trialFrom(*parabolic) : std::nullopt;
+  if (best.systems == 1 && parabolic) {
+    if (!ahead) trials.push_back(trialsFrom({*parabolic}, trial.base).front());
+    const std::optional<Best>& there = trials.back();
+    laid += there.has_value();
     if (there && there->rank > best.rank) best = *there;
   }
   // Only when the family along the zero-curvature direction leaves much of the surface uncovered or invalid
@@ -609,8 +631,7 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
   if (poor && best.start && (choice.base == BaseFamily::First || choice.base == BaseFamily::Conjugate) &&
       (options.method != LayingMethod::Prespecified || umbilicWithinCurvedPart(surface))) {
     const BaseFamily rule = choice.base, other = rule == BaseFamily::First ? BaseFamily::Conjugate : BaseFamily::First;
-    trial.base = other;
-    const Best alternative = bestStart();
+    const Best alternative = bestOf(trialsFrom(candidates, other), candidates.size());
     if (alternative.start && alternative.score > best.score + kClearTrial) {
       best = alternative;
       choice.base = other;
@@ -622,18 +643,21 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
                    ? options.cell
                    : predictedCell(surface, trialCell, vertices, faces, options.cell);
       };
+      // Both full-size lays at once.
       Triangulation layRule, layOther;
-      trial.cell = fullCell(best.vertices);
-      trial.start = best.start;
-      trial.base = rule;
-      const auto full = score(&layRule);
-      const double ruleCell = trial.cell;
-      trial.cell = fullCell(alternative.vertices);
-      trial.start = alternative.start;
-      trial.base = other;
-      const auto fullOther = score(&layOther);
-      const double otherCell = trial.cell;
-      trial.cell = trialCell;
+      LayingOptions ruleOptions = trial, otherOptions = trial;
+      ruleOptions.cell = fullCell(best.vertices);
+      ruleOptions.start = best.start;
+      ruleOptions.base = rule;
+      otherOptions.cell = fullCell(alternative.vertices);
+      otherOptions.start = alternative.start;
+      otherOptions.base = other;
+      std::optional<Trial> full, fullOther;
+      parallelTasks(2, [&](int i) {
+        if (i == 0) full = score(ruleOptions, &layRule);
+        else fullOther = score(otherOptions, &layOther);
+      });
+      const double ruleCell = ruleOptions.cell, otherCell = otherOptions.cell;
       if (fullOther && (!full || fullOther->plain > full->plain)) {
         best = alternative;
         choice.base = other;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 
 namespace phex {
 
@@ -101,7 +102,12 @@ Vec2 ParametricSurface::project(const Vec3& p, Vec2 uv) const {
 }
 
 void ParametricSurface::ensureSeeds() const {
-  if (!seedPoints_.empty()) return;
+  if (seedsReady_.value.load(std::memory_order_acquire)) return;
+  static std::mutex building;
+  const std::lock_guard<std::mutex> lock(building);
+  if (seedsReady_.value.load(std::memory_order_relaxed)) return;
+  seedPoints_.clear();
+  seedParams_.clear();
   const Domain d = domain();
   constexpr int n = 64;
   for (int i = 0; i <= n; ++i)
@@ -127,6 +133,7 @@ void ParametricSurface::ensureSeeds() const {
   grid_.ids.resize(seedPoints_.size());
   std::vector<int> fill(grid_.start.begin(), grid_.start.end() - 1);
   for (std::size_t i = 0; i < seedPoints_.size(); ++i) grid_.ids[fill[cellOf[i]]++] = static_cast<int>(i);
+  seedsReady_.value.store(true, std::memory_order_release);
 }
 
 Eigen::Vector3i ParametricSurface::SeedGrid::cellOf(const Vec3& p) const {

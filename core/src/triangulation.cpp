@@ -11,6 +11,7 @@
 #include "phex/ideal_triangle.hpp"
 #include "phex/mesh_surface.hpp"
 #include "phex/metrics.hpp"
+#include "phex/parallel.hpp"
 
 namespace phex {
 namespace {
@@ -178,8 +179,10 @@ std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface&
   std::vector<LocalGeometry> geo(nv);
   const auto* parametric = dynamic_cast<const ParametricSurface*>(&surface);
   const bool exact = parametric && static_cast<int>(t.uv.size()) == nv;
-  for (int v = 0; v < nv; ++v)
-    geo[v] = exact ? parametric->geometryAt(t.uv[v].x(), t.uv[v].y()) : surface.closestPoint(t.mesh.V.row(v).transpose());
+  parallelRanges(nv, 2000, [&](int begin, int end) {
+    for (int v = begin; v < end; ++v)
+      geo[v] = exact ? parametric->geometryAt(t.uv[v].x(), t.uv[v].y()) : surface.closestPoint(t.mesh.V.row(v).transpose());
+  });
   return geo;
 }
 

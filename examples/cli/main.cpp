@@ -4,6 +4,7 @@
 #include <phex/mesh_surface.hpp>
 #include <phex/pipeline.hpp>
 #include <phex/panels.hpp>
+#include <phex/parallel.hpp>
 
 #include <algorithm>
 #include <sys/resource.h>
@@ -94,6 +95,10 @@ Options of `phex run`:
   --triangulation FILE.obj  write the triangulation as OBJ
   --initial FILE.obj        write the mesh before optimization as OBJ
   --report FILE.json        write counts, planarity, iterations and timings as JSON
+  --threads N               threads for the parts that split into independent work (trial lays, flow
+                            lines, curvature fits, closest points, plane fits, measures); 0 (default):
+                            the PHEX_THREADS environment variable, else the machine's threads, at most
+                            8. The meshes are the same bits whatever the count
   --quiet                   no progress on stderr
 
 Options of `phex curvature`:
@@ -224,6 +229,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"surfaceFit", {{"applied", r.solve.surfaceFitted}, {"distanceBefore", r.solve.surfaceDistanceBefore},
                           {"distanceAfter", r.solve.surfaceDistanceAfter}, {"freeNodesSettled", r.solve.freeNodesSettled}}},
           {"milliseconds", timings},
+          {"threads", phex::threadCount()},
           {"peakMemoryMB", peakMemoryMB()}};
 }
 
@@ -302,7 +308,11 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--report") reportPath = value();
     else if (a == "--format") format = value();
     else if (a == "--quiet") quiet = true;
-    else usage("unknown option '" + a + "'");
+    else if (a == "--threads") {
+      const int n = parseInt(a, value());
+      if (n < 0) usage("--threads must be 0 (the default) or more, got " + std::to_string(n));
+      phex::setThreadCount(n);
+    } else usage("unknown option '" + a + "'");
   }
   if (p.cell != 0 && !(p.cell > 0)) usage("--cell must be positive");
   if (format.empty()) {

@@ -54,6 +54,17 @@ test('a run that stops short of the tolerance still writes its mesh, exits 2 and
   assert.equal(JSON.parse(readFileSync(report, 'utf8')).solver.method, 'volumes');
 });
 
+test('--threads changes the time, not the mesh', () => {
+  const outputs = ['1', '2'].map((n) => {
+    const obj = join(dir, `threads-${n}.obj`), report = join(dir, `threads-${n}.json`);
+    const r = phex('run', '--surface', 'wave-roof', '--faces', '1500', '--threads', n, '--out', obj, '--report', report, '--quiet');
+    assert.equal(r.code, 0, r.err);
+    assert.equal(JSON.parse(readFileSync(report, 'utf8')).threads, Number(n));
+    return readFileSync(obj, 'utf8');
+  });
+  assert.equal(outputs[0], outputs[1]);
+});
+
 test('--cell is an alternative to --faces', () => {
   const report = join(dir, 'cell.json');
   assert.equal(phex('run', '--surface', 'sphere', '--cell', '0.2', '--report', report, '--quiet').code, 0);
@@ -93,6 +104,8 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--panels', join(dir, 'p.svg'), '--panel-unit', 'ft'], /--panel-unit must be mm, cm, m or in/],
     [['triangulate', '--panels', join(dir, 'p.svg')], /--panels needs phex run/],
     [['triangulate', '--beams', join(dir, 'b.csv')], /--beams needs phex run/],
+    [['run', '--threads', '-1'], /--threads must be 0 \(the default\) or more/],
+    [['run', '--threads', 'all'], /--threads expects a number/],
   ];
   for (const [args, pattern] of cases) {
     const r = phex(...args);

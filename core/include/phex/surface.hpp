@@ -1,5 +1,6 @@
 // phex — the one interface every algorithm asks about the shape being tiled (§3).
 #pragma once
+#include <atomic>
 #include <memory>
 #include <string>
 #include <vector>
@@ -67,8 +68,20 @@ class ParametricSurface : public Surface {
     Eigen::Vector3i cellOf(const Vec3& p) const;
     int index(const Eigen::Vector3i& c) const;
   };
+  // Built on first use, once, whichever thread asks first (phex/parallel.hpp: trial lays query one surface
+  // at once); copies take the flag with the seeds.
   void ensureSeeds() const;
   std::size_t nearestSeed(const Vec3& p) const;
+  struct ReadyFlag {
+    std::atomic<bool> value{false};
+    ReadyFlag() = default;
+    ReadyFlag(const ReadyFlag& o) : value(o.value.load()) {}
+    ReadyFlag& operator=(const ReadyFlag& o) {
+      value.store(o.value.load());
+      return *this;
+    }
+  };
+  mutable ReadyFlag seedsReady_;
   mutable std::vector<Vec3> seedPoints_;
   mutable std::vector<Vec2> seedParams_;
   mutable SeedGrid grid_;

@@ -1,0 +1,25 @@
+// phex — threads for work that splits into independent parts (native builds; WebAssembly runs them in turn).
+#pragma once
+#include <functional>
+
+namespace phex {
+
+// How many threads phex uses: setThreadCount(n) for n >= 1, else the PHEX_THREADS environment variable,
+// else the hardware's threads (at most kMaxThreads). Always 1 in WebAssembly, which phex builds without
+// threads. Every parallel part computes exactly what one thread computes (each item on its own, written to
+// its own place, combined in order afterwards), so the meshes do not depend on the count.
+constexpr int kMaxThreads = 8;
+int threadCount();
+// n >= 1 sets the count (capped at kMaxThreads), 0 restores the default; other values throw InvalidParameter.
+void setThreadCount(int n);
+
+// body(begin, end) over [0, n) split into at most threadCount() contiguous ranges of at least `grain` items
+// each, run at once (the caller's thread takes the first). For loops of many small items that want scratch
+// space of their own per range. Waits for all; then rethrows the exception of the first range that threw.
+void parallelRanges(int n, int grain, const std::function<void(int begin, int end)>& body);
+
+// task(i) for i in [0, n), each item taken by the next free thread: for a few large items of unequal cost
+// (trial lays). Waits for all; then rethrows the exception of the lowest item that threw.
+void parallelTasks(int n, const std::function<void(int i)>& task);
+
+}  // namespace phex
