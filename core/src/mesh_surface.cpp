@@ -15,9 +15,6 @@
 namespace phex {
 namespace {
 
-// The jet fits split over threads in ranges of at least this many vertices.
-constexpr int kVerticesPerThread = 2000;
-
 [[noreturn]] void fail(const std::string& name, const std::string& what) {
   throw Error(ErrorCode::InvalidInput, "mesh '" + name + "': " + what);
 }
@@ -605,7 +602,7 @@ TriMesh MeshSurface::refined(int k) const {
   // Over two rings whatever noise() says: a coarse mesh's fits miss its vertices because the surface turns
   // much within two rings, not because they are scattered (a torus sampled 24 x 12 counted as noisy, and
   // its fits over 4 rings, spanning a third of its tube, blended into a surface far off it).
-  parallelRanges(nv, kVerticesPerThread, [&](int begin, int end) {
+  parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
     FitScratch scratch(nv);
     for (int v = begin; v < end; ++v) jets[v] = fitVertex(v, 2, trial[v], scratch);
   });
@@ -694,7 +691,7 @@ double MeshSurface::estimateCurvature(int minRings) {
   vertexGeometry_.resize(nv);
   shapeTensor_.resize(nv);
   std::vector<double> residual(nv, 0.0);
-  parallelRanges(nv, kVerticesPerThread, [&](int begin, int end) {
+  parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
     FitScratch scratch(nv);
     for (int v = begin; v < end; ++v) {
       const VertexFit fit = fitVertex(v, minRings, trialNormal[v], scratch);

@@ -10,9 +10,6 @@
 namespace phex {
 namespace {
 
-// Faces or vertices measured per thread, at least.
-constexpr int kItemsPerThread = 2000;
-
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 bool onSegment(const Vec2& p, const Vec2& q, const Vec2& x) {
@@ -234,7 +231,7 @@ MeshMetrics measureAll(const PolyMesh& mesh, const Surface* surface) {
     const double diagonal = surface->bounds().diagonal().norm();
     m.surfaceDistance.resize(m.vertexCount);
     vertexSign.resize(m.vertexCount);
-    parallelRanges(m.vertexCount, kItemsPerThread, [&](int begin, int end) {
+    parallelRanges(m.vertexCount, kPointsPerThread, [&](int begin, int end) {
       for (int v = begin; v < end; ++v) {
         const Vec3 p = mesh.vertex(v);
         const LocalGeometry g = surface->closestPoint(p);
@@ -253,7 +250,7 @@ MeshMetrics measureAll(const PolyMesh& mesh, const Surface* surface) {
   // Each face on its own (over threads); the sums after, in face order. `shape`: 1 elliptic, -1 hyperbolic, 0
   // parabolic at the face's scale, 2 across a parabolic curve (or no surface).
   std::vector<signed char> shape(m.faceCount, 0);
-  parallelRanges(m.faceCount, kItemsPerThread, [&](int begin, int end) {
+  parallelRanges(m.faceCount, kPointsPerThread, [&](int begin, int end) {
     std::vector<Vec2> corners;
     for (int f = begin; f < end; ++f) {
       // The face's plane, its corners in it and whether they cross: each computed once, shared by the measures.

@@ -18,10 +18,8 @@
 namespace phex {
 namespace {
 
-// Loops split over threads in ranges of at least this many items: plane fits (a few microseconds each) and
-// closest points (about one).
+// Plane fits (a few microseconds each) split over threads in ranges of at least this many faces.
 constexpr int kFacesPerThread = 1000;
-constexpr int kVerticesPerThread = 2000;
 
 // The share of the surface-distance weight (mu) that also pulls a vertex along its tangent plane towards its
 // foot point (see moveVertex).
@@ -703,7 +701,7 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
   };
   std::vector<LocalGeometry> feet(nv);
   auto footPoints = [&]() {  // closest points of the current vertices; returns the largest distance
-    parallelRanges(nv, kVerticesPerThread, [&](int begin, int end) {
+    parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
       for (int v = begin; v < end; ++v) feet[v] = surface.closestPoint(mesh.vertex(v));
     });
     double worst = 0;

@@ -179,7 +179,7 @@ std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface&
   std::vector<LocalGeometry> geo(nv);
   const auto* parametric = dynamic_cast<const ParametricSurface*>(&surface);
   const bool exact = parametric && static_cast<int>(t.uv.size()) == nv;
-  parallelRanges(nv, 2000, [&](int begin, int end) {
+  parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
     for (int v = begin; v < end; ++v)
       geo[v] = exact ? parametric->geometryAt(t.uv[v].x(), t.uv[v].y()) : surface.closestPoint(t.mesh.V.row(v).transpose());
   });

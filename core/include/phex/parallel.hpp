@@ -9,6 +9,9 @@ namespace phex {
 // threads. Every parallel part computes exactly what one thread computes (each item on its own, written to
 // its own place, combined in order afterwards), so the meshes do not depend on the count.
 constexpr int kMaxThreads = 8;
+// The grain of loops over points or faces of about a microsecond each (closest points, jet fits, measures):
+// a thread takes at least this many, so that small meshes stay on one.
+constexpr int kPointsPerThread = 2000;
 int threadCount();
 // n >= 1 sets the count (capped at kMaxThreads), 0 restores the default; other values throw InvalidParameter.
 void setThreadCount(int n);
