@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <cstdlib>
 #include <exception>
 #include <string>
@@ -25,10 +26,16 @@ std::atomic<int> chosen{0};  // setThreadCount's value; 0: the default
 
 int defaultThreads() {
 #ifdef PHEX_HAS_THREADS
+  // Set but not a count ("abc", "-1", "2x") is an error, as --threads' is: ignoring it would run on another
+  // count than the one asked for without a word.
   if (const char* env = std::getenv("PHEX_THREADS"); env && *env) {
     char* end = nullptr;
+    errno = 0;
     const long n = std::strtol(env, &end, 10);
-    if (end && *end == '\0' && n >= 1) return static_cast<int>(std::min<long>(n, kMaxThreads));
+    if (end == env || *end != '\0' || errno == ERANGE || n < 0)
+      throw Error(ErrorCode::InvalidParameter, "the PHEX_THREADS environment variable is '" + std::string(env) +
+                                                   "': it must be a whole number, 0 (the default) or at least 1");
+    if (n >= 1) return static_cast<int>(std::min<long>(n, kMaxThreads));
   }
   const unsigned hardware = std::thread::hardware_concurrency();
   return std::clamp(static_cast<int>(hardware), 1, kMaxThreads);

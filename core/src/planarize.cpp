@@ -601,8 +601,6 @@ namespace {
 // unknown per face, solved by conjugate gradients; two Gauss-Newton rounds (closest points recomputed,
 // the second reweighted towards the largest distances). Kept only if the largest distance drops and
 // no face becomes self-intersecting.
-// The node distance to the surface, over the bounding-box diagonal, past which the fit is tried a second way.
-constexpr double kFitRetry = 0.002;
 struct SurfaceFit {
   bool applied = false;
   double before = 0.0, after = 0.0;  // max vertex distance to the surface, absolute
@@ -1018,7 +1016,7 @@ PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const
     // folded faces' neighbours frozen at the second refreeze, then at the first.
     for (const FitMode retry : {FitMode{true, false}, FitMode{false, true}, FitMode{true, true}}) {
       const double reached = fit.applied ? fit.after : fit.before;
-      if (!(diagonal > 0 && reached > kFitRetry * diagonal)) break;
+      if (!(diagonal > 0 && reached > kSurfaceDistanceGoal * diagonal)) break;
       const Points kept = mesh.V;
       mesh.V = planar;
       const SurfaceFit again = fitPlanesToSurface(mesh, *options.surface, cancel, retry);

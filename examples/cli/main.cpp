@@ -332,6 +332,7 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
   if (!sheet.unit.empty() && sheet.unit != "mm" && sheet.unit != "cm" && sheet.unit != "m" && sheet.unit != "in")
     usage("--panel-unit must be mm, cm, m or in, got '" + sheet.unit + "'");
   phex::validate(p);
+  phex::threadCount();  // a malformed PHEX_THREADS fails here, before any output is opened
   // Fail on an unwritable output before computing anything.
   for (const std::string* path : {&out, &tri, &initial, &reportPath, &panels, &beams})
     if (!path->empty()) phex::writeTextFile(*path, "");

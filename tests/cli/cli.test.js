@@ -10,7 +10,11 @@ const PHEX = new URL('../../build/native/bin/phex', import.meta.url).pathname;
 const dir = mkdtempSync(join(tmpdir(), 'phex-cli-'));
 
 function phex(...args) {
-  const r = spawnSync(PHEX, args, { encoding: 'utf8' });
+  return phexWith({}, ...args);
+}
+
+function phexWith(env, ...args) {
+  const r = spawnSync(PHEX, args, { encoding: 'utf8', env: { ...process.env, ...env } });
   return { code: r.status, out: r.stdout, err: r.stderr };
 }
 
@@ -52,6 +56,18 @@ test('a run that stops short of the tolerance still writes its mesh, exits 2 and
   const reference = phex('run', '--surface', 'sphere', '--faces', '200', '--solver', 'volumes', '--report', report, '--quiet');
   assert.equal(reference.code, 0, reference.err);
   assert.equal(JSON.parse(readFileSync(report, 'utf8')).solver.method, 'volumes');
+});
+
+test('a PHEX_THREADS that is not a count is an error naming it; --threads overrides it', () => {
+  for (const value of ['abc', '-1', '2x', '99999999999999999999']) {
+    const r = phexWith({ PHEX_THREADS: value }, 'run', '--surface', 'torus', '--faces', '300', '--out', join(dir, 'env.obj'), '--quiet');
+    assert.equal(r.code, 1, `PHEX_THREADS=${value} exits 1`);
+    assert.match(r.err, /the PHEX_THREADS environment variable is '.*': it must be a whole number/, value);
+    assert.ok(!existsSync(join(dir, 'env.obj')), 'no mesh written');
+  }
+  const ok = phexWith({ PHEX_THREADS: 'abc' }, 'run', '--surface', 'torus', '--faces', '300', '--threads', '1', '--out', join(dir, 'env.obj'), '--quiet');
+  assert.equal(ok.code, 0, ok.err);
+  assert.equal(phexWith({ PHEX_THREADS: '0' }, 'run', '--surface', 'torus', '--faces', '300', '--out', join(dir, 'env0.obj'), '--quiet').code, 0);
 });
 
 test('--threads changes the time, not the mesh', () => {

@@ -5,7 +5,8 @@
 namespace phex {
 
 // How many threads phex uses: setThreadCount(n) for n >= 1, else the PHEX_THREADS environment variable,
-// else the hardware's threads (at most kMaxThreads). Always 1 in WebAssembly, which phex builds without
+// else the hardware's threads (at most kMaxThreads); a PHEX_THREADS that is not a whole number >= 0 makes
+// threadCount (and so any run) throw InvalidParameter naming it. Always 1 in WebAssembly, which phex builds without
 // threads. Every parallel part computes exactly what one thread computes (each item on its own, written to
 // its own place, combined in order afterwards), so the meshes do not depend on the count.
 constexpr int kMaxThreads = 8;

@@ -55,6 +55,10 @@ struct IterationLog {
   double milliseconds = 0.0;
 };
 
+// The goal for the largest node distance to the surface, over its bounding-box diagonal (0.2 %): past it the
+// surface fit tries other ways (planarize) and the pipeline the other dual (runPipeline).
+inline constexpr double kSurfaceDistanceGoal = 0.002;
+
 struct PlanarizeReport {
   int iterations = 0;
   int rounds = 0;
