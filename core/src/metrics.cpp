@@ -317,4 +317,12 @@ MeshMetrics measure(const PolyMesh& mesh) { return measureAll(mesh, nullptr); }
 
 MeshMetrics measure(const PolyMesh& mesh, const Surface& surface) { return measureAll(mesh, &surface); }
 
+double largestSurfaceDistance(const PolyMesh& mesh, const Surface& surface) {
+  std::vector<double> off(mesh.V.rows(), 0.0);
+  parallelRanges(static_cast<int>(off.size()), kPointsPerThread, [&](int begin, int end) {
+    for (int v = begin; v < end; ++v) off[v] = (surface.closestPoint(mesh.vertex(v)).point - mesh.vertex(v)).norm();
+  });
+  return off.empty() ? 0.0 : *std::max_element(off.begin(), off.end());
+}
+
 }  // namespace phex

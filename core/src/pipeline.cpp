@@ -1399,11 +1399,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   const double diagonal = surface.bounds().diagonal().norm();
   auto offSurface = [&](const PipelineResult& x) {  // the largest node distance over the diagonal
     if (po.fitSurface && x.solve.converged) return x.solve.surfaceDistanceAfter;  // planarize measured it
-    std::vector<double> off(x.hex.V.rows(), 0.0);
-    parallelRanges(static_cast<int>(off.size()), kPointsPerThread, [&](int begin, int end) {
-      for (int v = begin; v < end; ++v) off[v] = (surface.closestPoint(x.hex.vertex(v)).point - x.hex.vertex(v)).norm();
-    });
-    return diagonal > 0 && !off.empty() ? *std::max_element(off.begin(), off.end()) / diagonal : 0.0;
+    return diagonal > 0 ? largestSurfaceDistance(x.hex, surface) / diagonal : 0.0;
   };
   if (params.duality == Duality::Auto) {
     const int crossed = crossing(r.hex);

@@ -1046,11 +1046,7 @@ PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const
       report.freeNodesSettled = 0;
     }
     double after = report.surfaceFitted ? fit.after : fit.before;
-    if (report.freeNodesSettled > 0) {
-      after = 0;
-      for (int v = 0; v < mesh.V.rows(); ++v)
-        after = std::max(after, (options.surface->closestPoint(mesh.vertex(v)).point - mesh.vertex(v)).norm());
-    }
+    if (report.freeNodesSettled > 0) after = largestSurfaceDistance(mesh, *options.surface);
     if (diagonal > 0) {
       report.surfaceDistanceBefore = fit.before / diagonal;
       report.surfaceDistanceAfter = after / diagonal;

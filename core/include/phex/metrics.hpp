@@ -81,4 +81,8 @@ MeshMetrics measure(const PolyMesh& mesh);
 // Also measures how far the vertices are from `surface`.
 MeshMetrics measure(const PolyMesh& mesh, const Surface& surface);
 
+// The largest distance of a vertex of `mesh` to `surface` (absolute; 0 for no vertices): measure's
+// surfaceDistanceMax times the diagonal, without the rest of the measures.
+double largestSurfaceDistance(const PolyMesh& mesh, const Surface& surface);
+
 }  // namespace phex
