@@ -15,6 +15,7 @@
 #include "phex/direction_field.hpp"
 #include "phex/dupin.hpp"
 #include "phex/error.hpp"
+#include "phex/global_triangulation.hpp"
 #include "phex/laying.hpp"
 #include "phex/mesh_io.hpp"
 #include "phex/mesh_surface.hpp"
@@ -69,8 +70,9 @@ TriangulationMethod parseTriangulationMethod(const std::string& name) {
   if (name == "progressive") return TriangulationMethod::Progressive;
   if (name == "prespecified") return TriangulationMethod::Prespecified;
   if (name == "subdivision") return TriangulationMethod::Subdivision;
+  if (name == "global") return TriangulationMethod::Global;
   throw Error(ErrorCode::InvalidParameter,
-              "method must be 'auto', 'progressive', 'prespecified', 'subdivision' or 'lattice' (got '" + name + "')");
+              "method must be 'auto', 'global', 'progressive', 'prespecified', 'subdivision' or 'lattice' (got '" + name + "')");
 }
 
 const char* triangulationMethodName(TriangulationMethod m) {
@@ -80,6 +82,7 @@ const char* triangulationMethodName(TriangulationMethod m) {
     case TriangulationMethod::Progressive: return "progressive";
     case TriangulationMethod::Prespecified: return "prespecified";
     case TriangulationMethod::Subdivision: return "subdivision";
+    case TriangulationMethod::Global: return "global";
   }
   return "progressive";
 }
@@ -303,8 +306,19 @@ void validate(const PipelineParams& p) {
     fail("direction must be a non-zero vector of three finite numbers");
   if (p.method != TriangulationMethod::Subdivision) parseFieldSpec(p.field);
   if (p.mesh && p.mesh->bytes.empty()) fail("the uploaded mesh '" + p.mesh->name + "' is empty (0 bytes)");
+  validate(globalOptions(p, p.cell > 0 ? p.cell : 1.0));
   if (p.mesh && p.method == TriangulationMethod::Lattice)
     fail("the lattice method needs an analytic surface; use method 'progressive' or 'prespecified' for an uploaded mesh");
+}
+
+GlobalOptions globalOptions(const PipelineParams& p, double cell) {
+  GlobalOptions o;
+  o.cell = cell;
+  o.faces = cell > 0 ? 0 : p.faces;
+  o.anisotropy = p.anisotropy;
+  o.alignment = p.alignment;
+  o.curvatureSizing = p.curvatureSizing;
+  return o;
 }
 
 double farNodeDistance(const PolyMesh& hex, double diagonal) {
@@ -925,6 +939,29 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     }
     if (checked) {
       // Laid above, by the geodesic route.
+    } else if (params.method == TriangulationMethod::Global) {
+      t.triangulation = globalTriangulation(*t.surface, globalOptions(params, params.cell > 0 ? params.cell : 0), progress, cancel);
+      if (const char* it = getenv("PHEX_SMOOTH")) {
+        const VertexRings rings = vertexRings(t.triangulation.mesh);
+        TriMesh& T = t.triangulation.mesh;
+        const double w = getenv("PHEX_SMOOTHW") ? atof(getenv("PHEX_SMOOTHW")) : 0.5;
+        for (int iteration = 0; iteration < atoi(it); ++iteration) {
+          Points next = T.V;
+          for (int v = 0; v < T.V.rows(); ++v) {
+            if (!rings.closed[v] || rings.triangles[v].empty()) continue;
+            Vec3 sum = Vec3::Zero();
+            int n = 0;
+            for (int f : rings.triangles[v]) for (int k = 0; k < 3; ++k) if (T.F(f, k) != v) sum += T.V.row(T.F(f, k)).transpose(), ++n;
+            const Vec3 x = T.V.row(v).transpose();
+            const LocalGeometry g = t.surface->closestPoint(x);
+            Vec3 d = sum / n - x;
+            d -= d.dot(g.normal) * g.normal;
+            next.row(v) = t.surface->closestPoint(x + w * d).point.transpose();
+          }
+          T.V = next;
+        }
+      }
+      if (getenv("PHEX_REPAIR")) repairStars(t.triangulation, *t.surface);
     } else if (params.method == TriangulationMethod::Lattice) {
       t.triangulation = latticeTriangulation(dynamic_cast<const ParametricSurface&>(*t.surface), cell);
       repairStars(t.triangulation, *t.surface);

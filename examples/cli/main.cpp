@@ -44,7 +44,14 @@ Options of `phex run`:
                             for a closed convex one, subdivision for a closed convex polyhedron of
                             fewer vertices than the faces asked for), progressive (§5.2 Method 1), prespecified
                             (Method 2, along --field), subdivision (§7, closed convex surfaces) or
-                            lattice (parameter rows; analytic surfaces only)
+                            lattice (parameter rows; analytic surfaces only), or global (a 6-fold
+                            field in the Dupin metric with singular vertices, its lattice extracted:
+                            any surface, any genus, pentagons and heptagons at the singularities)
+  --anisotropy A            global: largest ratio of the Dupin metric's axes followed, 1..8 (default 2;
+                            1 gives triangles equilateral in space)
+  --alignment W             global: weight of the alignment with the flatter principal direction, 0..10
+                            (default 1; 0 leaves the field free but for the boundary)
+  --curvature-sizing S      global: how far the cell follows the curvature, 0..1 (default 0: uniform)
   --field SPEC              direction field: principal (default; under --method auto the surface's
                             recommended field; on a dome whose curvature lines turn around an umbilic,
                             section), angle:DEG, param, radial, diverging[:DEG], spiral[:DEG],
@@ -279,6 +286,9 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--method") p.method = phex::parseTriangulationMethod(value());
     else if (a == "--field") p.field = value();
     else if (a == "--lower-bound") p.lowerBound = parseNumber(a, value());
+    else if (a == "--anisotropy") p.anisotropy = parseNumber(a, value());
+    else if (a == "--alignment") p.alignment = parseNumber(a, value());
+    else if (a == "--curvature-sizing") p.curvatureSizing = parseNumber(a, value());
     else if (a == "--start") p.start = parseVector(a, value());
     else if (a == "--direction") p.direction = parseVector(a, value());
     else if (a == "--param") {

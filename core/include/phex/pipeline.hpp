@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "phex/duality.hpp"
+#include "phex/global_triangulation.hpp"
 #include "phex/metrics.hpp"
 #include "phex/planarize.hpp"
 #include "phex/progress.hpp"
@@ -29,9 +30,11 @@ enum class TriangulationMethod {
   Lattice,       // rows of the parameter domain, every other one shifted (analytic surfaces only)
   Progressive,   // Method 1, progressive conjugation (§5.2)
   Prespecified,  // Method 2, pre-specified conjugation along a direction field (§5.2)
-  Subdivision    // Loop subdivision of a convex control mesh (§7): closed convex surfaces, 12 pentagons
+  Subdivision,   // Loop subdivision of a convex control mesh (§7): closed convex surfaces, 12 pentagons
+  Global         // a 6-fold field in the Dupin metric with singular vertices, its lattice, extracted: any surface
+                 // (phex/global_triangulation.hpp)
 };
-// "auto" | "lattice" | "progressive" | "prespecified" | "subdivision"; parseTriangulationMethod throws
+// "auto" | "global" | "lattice" | "progressive" | "prespecified" | "subdivision"; parseTriangulationMethod throws
 // Error(InvalidParameter) for other names.
 TriangulationMethod parseTriangulationMethod(const std::string& name);
 const char* triangulationMethodName(TriangulationMethod m);
@@ -77,7 +80,15 @@ struct PipelineParams {
   // same way (PipelineResult::interiorFacesSplit); on a surface laid in several systems of rows (its seams
   // and rows along parabolic rings leave more such faces: round bumps) every interior face left off is.
   bool splitBoundaryPanels = true;
+  // The global method's field (GlobalOptions): the Dupin metric's largest anisotropy followed, in [1, 8]; the
+  // weight of the principal alignment, in [0, 10]; how far the cell follows the curvature, in [0, 1] (0: uniform).
+  double anisotropy = 1.5;
+  double alignment = 1.0;
+  double curvatureSizing = 0.0;
 };
+
+// The global method's options of `params`, at `cell` (0: calibrated to params.faces).
+GlobalOptions globalOptions(const PipelineParams& params, double cell);
 
 // "dupin" / "tangent" / "auto" <-> Duality; parseDuality throws Error(InvalidParameter) for other names.
 Duality parseDuality(const std::string& name);

@@ -11,6 +11,13 @@ namespace phex {
 
 struct VertexRings;
 
+// A singular point of a direction field: where its directions turn by `index` sixths of a turn around it (+1: a
+// vertex of valence 5 of the triangulation, a pentagon of the P-Hex mesh; -1: valence 7, a heptagon).
+struct FieldSingularity {
+  Vec3 position = Vec3::Zero();
+  int index = 0;
+};
+
 struct Triangulation {
   TriMesh mesh;
   std::vector<Vec2> uv;  // #V parameters when laid in the parameter domain of a ParametricSurface; else empty
@@ -19,6 +26,8 @@ struct Triangulation {
   // Systems of rows laid (layTriangulation): more than one where the rows from L0 left much of the surface
   // uncovered (no one family of rows reaches it, e.g. around a second bump) and seams join them.
   int systems = 1;
+  // The singular points of the field the global method laid along (globalTriangulation); empty for the others.
+  std::vector<FieldSingularity> singularities;
 };
 
 // The local geometry at every vertex: exact from `uv` on a parametric surface, else from closestPoint.

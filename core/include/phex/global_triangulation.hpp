@@ -1,0 +1,53 @@
+// phex — the global triangulation: any surface, any genus, with singular vertices placed by a field (beyond §7).
+#pragma once
+#include <vector>
+
+#include "phex/progress.hpp"
+#include "phex/surface.hpp"
+#include "phex/triangulation.hpp"
+
+namespace phex {
+
+// §7 ends where the paper's methods do: they lay rows along one conjugate network without singularities, and
+// closed surfaces, handles, hill tops and most uploads have none. The global method tiles any surface in three
+// steps, each in its own file under core/src/global/:
+//  1. a 3-direction (6-fold) field, smooth in the Dupin metric (the frame in which the Dupin indicatrix is a
+//     circle, its anisotropy bounded where it degenerates), one direction along the principal direction of
+//     least |curvature| where the curvature is anisotropic, along the boundary where there is one; its
+//     singular points (index +-1/6) come out of the optimization (field.cpp);
+//  2. a triangular lattice along it at the asked cell, as a position field (lattice.cpp);
+//  3. the lattice's points as the vertices of a triangle mesh, connected by their Voronoi regions on the
+//     surface, boundary vertices on the boundary curves (extraction.cpp).
+// A triangle equilateral in the Dupin frame is ideal where K > 0 (its Dupin centre is its centroid, §5.1) and
+// valid where K < 0 (three directions 60 degrees apart never lie between the asymptotes, Prop. 5): with one edge
+// along the direction of least |curvature| it stays valid where the metric's anisotropy is bounded below the
+// surface's. The dual of a manifold triangle mesh has three faces at every interior node, so the P-Hex mesh's
+// nodes all join three beams; its faces other than hexagons stand at the field's singularities and on the
+// boundary.
+struct GlobalOptions {
+  // Wanted edge length of the triangulation (the distance between neighbouring hexagons' centres), model units.
+  double cell = 0;
+  // When > 0, the cell is calibrated so that the triangulation has about this many vertices (hexagons).
+  int faces = 0;
+  // Largest ratio of the Dupin metric's two axes the field follows, in [1, 8]: 1 gives triangles equilateral
+  // in space (an isotropic field), larger values follow the Dupin indicatrix further where it is elongated.
+  double anisotropy = 1.5;
+  // Weight of the alignment with the principal direction of least |curvature| where the metric is anisotropic,
+  // against the field's smoothness, in [0, 10]; 0 leaves the field free but for the boundary.
+  double alignment = 1.0;
+  // How far the cell follows the curvature, in [0, 1]: 0 uniform panels; 1 cells shrinking as the square root
+  // of the largest |curvature| relative to the surface's median (within a factor 3 either way).
+  double curvatureSizing = 0.0;
+};
+
+// Throws Error(InvalidParameter) naming the first option out of its range.
+void validate(const GlobalOptions& options);
+
+// Lays the global triangulation of `surface` (an uploaded MeshSurface or an analytic surface). Its notes give the
+// field's singularities, the cell, and anything left short; Triangulation::singularities lists them.
+// Throws Error(CannotTile) where no triangulation can be laid (a cell larger than the surface, a component smaller
+// than a cell), naming the place.
+Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& options, const ProgressFn& progress = {},
+                                  const CancelFlag* cancel = nullptr);
+
+}  // namespace phex

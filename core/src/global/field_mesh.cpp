@@ -1,0 +1,338 @@
+// phex — the fine mesh the global method's fields live on, with the Dupin frame at every vertex.
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <cstdlib>
+#include <numeric>
+#include <unordered_map>
+
+#include "global.hpp"
+#include "phex/error.hpp"
+#include "phex/mesh_surface.hpp"
+#include "phex/parallel.hpp"
+#include "phex/triangulation.hpp"
+
+namespace phex::global {
+namespace {
+
+// The field mesh stops being refined past this many triangles.
+constexpr std::size_t kMaxFieldTriangles = std::size_t(6) << 20;
+// Edges longer than this many field-mesh edges after the uniform split are bisected.
+constexpr double kLongEdge = 1.3;
+// The Dupin frame's aspect (sqrt of |k| ratio, regularized) from which the field is aligned, and fully.
+constexpr double kAlignFrom = 1.2, kAlignFull = 1.7;
+// The regularization of the aspect that decides the alignment, as a share of the metric's.
+static const double kAlignEps = getenv("PHEX_AE") ? atof(getenv("PHEX_AE")) : 0.05;
+
+// Each triangle of `mesh` split k x k: the corners keep their ids, then come the edges' points, then the inner
+// points. `where` gets, per vertex, a triangle of `mesh` holding it and its barycentric coordinates there, and
+// `source` per triangle the triangle of `mesh` it lies in.
+TriMesh split(const TriMesh& mesh, int k, std::vector<std::pair<int, Vec3>>& where, std::vector<int>& source) {
+  const int nv = static_cast<int>(mesh.V.rows()), nf = static_cast<int>(mesh.F.rows());
+  where.assign(nv, {-1, Vec3::Zero()});
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) {
+      Vec3 b = Vec3::Zero();
+      b(c) = 1;
+      if (where[mesh.F(f, c)].first < 0) where[mesh.F(f, c)] = {f, b};
+    }
+  std::vector<Vec3> points;
+  for (int v = 0; v < nv; ++v) points.push_back(mesh.V.row(v).transpose());
+  std::unordered_map<std::uint64_t, int> edgeFirst;  // edge (a < b) -> id of its first inner point (from a)
+  std::vector<int> grid((k + 1) * (k + 2) / 2);
+  auto at = [&](int i, int j) -> int& { return grid[j * (k + 1) - j * (j - 1) / 2 + i]; };  // i + j <= k
+  std::vector<int> tri;
+  source.clear();
+  for (int f = 0; f < nf; ++f) {
+    const int c[3] = {mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)};
+    auto inner = [&](int i, int j) {
+      const Vec3 b(double(k - i - j) / k, double(i) / k, double(j) / k);
+      points.push_back(b(0) * points[c[0]] + b(1) * points[c[1]] + b(2) * points[c[2]]);
+      where.push_back({f, b});
+      return static_cast<int>(points.size()) - 1;
+    };
+    // The s-th point (1 .. k - 1) of edge c[e] -> c[e + 1] counted from c[e], shared with the twin triangle.
+    auto edgePoint = [&](int e, int s) {
+      const int a = c[e], b = c[(e + 1) % 3], lo = std::min(a, b), hi = std::max(a, b);
+      const std::uint64_t key = std::uint64_t(lo) * std::uint64_t(nv) + std::uint64_t(hi);
+      auto it = edgeFirst.find(key);
+      if (it == edgeFirst.end()) {
+        const int first = static_cast<int>(points.size());
+        for (int t = 1; t < k; ++t) {
+          const double w = double(t) / k;
+          points.push_back((1 - w) * points[lo] + w * points[hi]);
+          Vec3 bc = Vec3::Zero();
+          for (int q = 0; q < 3; ++q) bc(q) = c[q] == lo ? 1 - w : c[q] == hi ? w : 0;
+          where.push_back({f, bc});
+        }
+        it = edgeFirst.emplace(key, first).first;
+      }
+      return it->second + (a < b ? s : k - s) - 1;
+    };
+    for (int j = 0; j <= k; ++j)
+      for (int i = 0; i + j <= k; ++i) {
+        int id;
+        if (i == 0 && j == 0) id = c[0];
+        else if (i == k) id = c[1];
+        else if (j == k) id = c[2];
+        else if (j == 0) id = edgePoint(0, i);
+        else if (i + j == k) id = edgePoint(1, j);
+        else if (i == 0) id = edgePoint(2, k - j);
+        else id = inner(i, j);
+        at(i, j) = id;
+      }
+    for (int j = 0; j < k; ++j)
+      for (int i = 0; i + j < k; ++i) {
+        tri.insert(tri.end(), {at(i, j), at(i + 1, j), at(i, j + 1)});
+        source.push_back(f);
+        if (i + j + 1 < k) tri.insert(tri.end(), {at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)}), source.push_back(f);
+      }
+  }
+  TriMesh out;
+  out.V.resize(static_cast<int>(points.size()), 3);
+  for (int v = 0; v < static_cast<int>(points.size()); ++v) out.V.row(v) = points[v].transpose();
+  out.F.resize(static_cast<int>(tri.size() / 3), 3);
+  for (int f = 0; f < out.F.rows(); ++f)
+    for (int q = 0; q < 3; ++q) out.F(f, q) = tri[3 * f + q];
+  return out;
+}
+
+// `fine` (a refinement of `mesh`, each triangle in the triangle `source` of mesh) refined until no edge is longer than `edge`: every longer edge split at its midpoint, each triangle cut by
+// the pattern of its split edges (one: two triangles, two: three, three: four), again until none is left (a
+// conforming refinement, where a uniform k x k split would leave the longest triangles of a graded mesh
+// under-sampled). `where` gets, per vertex, a triangle of `mesh` holding it and its barycentric coordinates there.
+TriMesh refine(const TriMesh& mesh, const TriMesh& fine, std::vector<int> source, double edge, std::size_t maxTriangles,
+               std::vector<std::pair<int, Vec3>>& where) {
+  const int nv0 = static_cast<int>(fine.V.rows()), nf0 = static_cast<int>(fine.F.rows());
+  std::vector<Vec3> points(nv0);
+  for (int v = 0; v < nv0; ++v) points[v] = fine.V.row(v).transpose();
+  std::vector<std::array<int, 3>> tris(nf0);
+  for (int f = 0; f < nf0; ++f) tris[f] = {fine.F(f, 0), fine.F(f, 1), fine.F(f, 2)};
+  // Barycentric coordinates of vertex v in source triangle s (v lies on it: a corner, or on its edges or inside).
+  auto baryIn = [&](int v, int s) -> Vec3 {
+    if (where[v].first == s) return where[v].second;
+    for (int c = 0; c < 3; ++c)
+      if (mesh.F(s, c) == v) {
+        Vec3 b = Vec3::Zero();
+        b(c) = 1;
+        return b;
+      }
+    const Vec3 a = mesh.V.row(mesh.F(s, 0)), e1 = Vec3(mesh.V.row(mesh.F(s, 1))) - a, e2 = Vec3(mesh.V.row(mesh.F(s, 2))) - a;
+    const Vec3 d = points[v] - a;
+    const double g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2), det = g11 * g22 - g12 * g12;
+    const double b1 = det > 0 ? (g22 * dot(e1, d) - g12 * dot(e2, d)) / det : 0.0;
+    const double b2 = det > 0 ? (g11 * dot(e2, d) - g12 * dot(e1, d)) / det : 0.0;
+    return Vec3(1 - b1 - b2, b1, b2);
+  };
+  const double limit = edge * edge;
+  for (int pass = 0; pass < 32; ++pass) {
+    std::unordered_map<std::uint64_t, int> midpoint;
+    auto key = [](int a, int b) { return (std::uint64_t(std::min(a, b)) << 32) | std::uint64_t(std::max(a, b)); };
+    for (std::size_t t = 0; t < tris.size(); ++t)
+      for (int c = 0; c < 3; ++c) {
+        const int a = tris[t][c], b = tris[t][(c + 1) % 3];
+        if ((points[a] - points[b]).squaredNorm() <= limit) continue;
+        auto [it, added] = midpoint.emplace(key(a, b), -1);
+        if (!added) continue;
+        it->second = static_cast<int>(points.size());
+        points.push_back(0.5 * (points[a] + points[b]));
+        where.push_back({source[t], 0.5 * (baryIn(a, source[t]) + baryIn(b, source[t]))});
+      }
+    if (midpoint.empty()) break;
+    std::vector<std::array<int, 3>> next;
+    std::vector<int> nextSource;
+    next.reserve(tris.size() * 3);
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      const auto& T = tris[t];
+      int m[3];
+      int split = 0;
+      for (int c = 0; c < 3; ++c) {
+        const auto it = midpoint.find(key(T[c], T[(c + 1) % 3]));
+        m[c] = it == midpoint.end() ? -1 : it->second;
+        split += m[c] >= 0;
+      }
+      auto add = [&](int a, int b, int c) { next.push_back({a, b, c}), nextSource.push_back(source[t]); };
+      if (split == 0) {
+        add(T[0], T[1], T[2]);
+      } else if (split == 3) {
+        add(T[0], m[0], m[2]), add(m[0], T[1], m[1]), add(m[2], m[1], T[2]), add(m[0], m[1], m[2]);
+      } else {
+        // Rotate so that edge 0 (T0 -> T1) is split; then edge 1 or 2 may be too.
+        int r = 0;
+        while (m[r] < 0) ++r;
+        const int a = T[r], b = T[(r + 1) % 3], c = T[(r + 2) % 3];
+        const int mab = m[r], mbc = m[(r + 1) % 3], mca = m[(r + 2) % 3];
+        if (split == 1) {
+          add(a, mab, c), add(mab, b, c);
+        } else if (mbc >= 0) {
+          add(a, mab, c), add(mab, b, mbc), add(mab, mbc, c);
+        } else {  // mca
+          add(a, mab, mca), add(mab, b, c), add(mab, c, mca);
+        }
+      }
+    }
+    tris.swap(next);
+    source.swap(nextSource);
+    if (tris.size() > maxTriangles) break;
+  }
+  TriMesh out;
+  out.V.resize(static_cast<int>(points.size()), 3);
+  for (int v = 0; v < static_cast<int>(points.size()); ++v) out.V.row(v) = points[v].transpose();
+  out.F.resize(static_cast<int>(tris.size()), 3);
+  for (int f = 0; f < out.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) out.F(f, c) = tris[f][c];
+  return out;
+}
+
+void buildTopology(FieldMesh& m) {
+  const int nv = m.vertexCount(), nf = static_cast<int>(m.F.rows());
+  // Adjacency.
+  std::vector<int> count(nv + 1, 0);
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) count[m.F(f, c) + 1] += 2;
+  std::vector<int> start(nv + 1, 0);
+  for (int v = 0; v < nv; ++v) start[v + 1] = start[v] + count[v + 1];
+  std::vector<int> fill(start.begin(), start.end() - 1), all(start.back());
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = m.F(f, c), b = m.F(f, (c + 1) % 3);
+      all[fill[a]++] = b;
+      all[fill[b]++] = a;
+    }
+  m.start.assign(nv + 1, 0);
+  m.adjacent.clear();
+  for (int v = 0; v < nv; ++v) {
+    std::sort(all.begin() + start[v], all.begin() + start[v + 1]);
+    const auto end = std::unique(all.begin() + start[v], all.begin() + start[v + 1]);
+    m.adjacent.insert(m.adjacent.end(), all.begin() + start[v], end);
+    m.start[v + 1] = static_cast<int>(m.adjacent.size());
+  }
+  // Boundary: half-edges a -> b with no b -> a. Their next one starts at b (one per boundary vertex: manifold).
+  std::unordered_map<std::uint64_t, int> directed;
+  directed.reserve(3 * static_cast<std::size_t>(nf));
+  auto key = [nv](int a, int b) { return std::uint64_t(a) * std::uint64_t(nv) + std::uint64_t(b); };
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) directed[key(m.F(f, c), m.F(f, (c + 1) % 3))] = f;
+  std::vector<int> next(nv, -1);
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = m.F(f, c), b = m.F(f, (c + 1) % 3);
+      if (!directed.count(key(b, a))) next[a] = b;
+    }
+  m.boundary.assign(nv, 0);
+  m.loops.clear();
+  for (int v = 0; v < nv; ++v) {
+    if (next[v] < 0 || m.boundary[v]) continue;
+    std::vector<int> loop;
+    for (int w = v; w >= 0 && !m.boundary[w]; w = next[w]) m.boundary[w] = 1, loop.push_back(w);
+    m.loops.push_back(std::move(loop));
+  }
+  m.boundaryTangent.assign(nv, Vec3::Zero());
+  for (const std::vector<int>& loop : m.loops) {
+    const int n = static_cast<int>(loop.size());
+    for (int i = 0; i < n; ++i) {
+      const Vec3 d = m.point(loop[(i + 1) % n]) - m.point(loop[(i + n - 1) % n]);
+      m.boundaryTangent[loop[i]] = normalized(tangential(d, m.frame[loop[i]].n));
+    }
+  }
+  // Components.
+  m.component.assign(nv, -1);
+  m.components = 0;
+  std::vector<int> stack;
+  for (int v = 0; v < nv; ++v) {
+    if (m.component[v] >= 0) continue;
+    m.component[v] = m.components;
+    stack.push_back(v);
+    while (!stack.empty()) {
+      const int w = stack.back();
+      stack.pop_back();
+      for (int i = m.start[w]; i < m.start[w + 1]; ++i)
+        if (m.component[m.adjacent[i]] < 0) m.component[m.adjacent[i]] = m.components, stack.push_back(m.adjacent[i]);
+    }
+    ++m.components;
+  }
+  // Areas and the mean edge.
+  m.area.assign(nv, 0.0);
+  double edges = 0;
+  for (int f = 0; f < nf; ++f) {
+    const Vec3 a = m.point(m.F(f, 0)), b = m.point(m.F(f, 1)), c = m.point(m.F(f, 2));
+    const double A = 0.5 * norm(cross(b - a, c - a));
+    for (int q = 0; q < 3; ++q) m.area[m.F(f, q)] += A / 3;
+    edges += norm(b - a) + norm(c - b) + norm(a - c);
+  }
+  m.edgeMean = nf > 0 ? edges / (3.0 * nf) : 0.0;
+}
+
+}  // namespace
+
+FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, const CancelFlag* cancel) {
+  FieldMesh m;
+  std::vector<LocalGeometry> geo;
+  if (const auto* mesh = dynamic_cast<const MeshSurface*>(&surface)) {
+    // Split k x k where most edges are under `edge` (k from the median edge), then the longer ones bisected.
+    const TriMesh& base = mesh->mesh();
+    std::vector<double> lengths;
+    for (int f = 0; f < base.F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) lengths.push_back((base.V.row(base.F(f, c)) - base.V.row(base.F(f, (c + 1) % 3))).norm());
+    std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+    const double most = std::floor(std::sqrt(double(kMaxFieldTriangles) / std::max<double>(1.0, double(base.F.rows()))));
+    const int k = static_cast<int>(std::clamp(std::ceil(lengths[lengths.size() / 2] / edge - 0.2), 1.0, std::max(1.0, most)));
+    std::vector<std::pair<int, Vec3>> where;
+    std::vector<int> source;
+    const TriMesh split = global::split(base, k, where, source);
+    TriMesh fine = refine(base, split, std::move(source), kLongEdge * edge, kMaxFieldTriangles, where);
+    geo.resize(fine.V.rows());
+    parallelRanges(static_cast<int>(fine.V.rows()), kPointsPerThread, [&](int begin, int end) {
+      for (int v = begin; v < end; ++v)
+        geo[v] = v < base.V.rows() ? mesh->vertexGeometry(v) : mesh->geometryInTriangle(where[v].first, where[v].second);
+    });
+    m.V = std::move(fine.V);
+    m.F = std::move(fine.F);
+  } else if (const auto* parametric = dynamic_cast<const ParametricSurface*>(&surface)) {
+    Triangulation t = latticeTriangulation(*parametric, edge);
+    geo = vertexGeometry(t, surface);
+    m.V = std::move(t.mesh.V);
+    m.F = std::move(t.mesh.F);
+  } else {
+    throw Error(ErrorCode::InvalidParameter, "the global method needs an uploaded mesh or an analytic surface");
+  }
+  checkCancel(cancel);
+  const int nv = m.vertexCount();
+  if (nv == 0 || m.F.rows() == 0) throw Error(ErrorCode::CannotTile, "the surface has no triangles to lay a field on");
+  for (int v = 0; v < nv; ++v) m.V.row(v) = geo[v].point.transpose();
+
+  // The Dupin metric, bounded: the frame's axes scale as the square roots of |k| + eps, where eps is a quarter
+  // of the surface's median largest |curvature| (flat parts and parabolic curves: the metric tends to the
+  // isotropic one there instead of degenerating), and their ratio is at most `anisotropy`.
+  m.curvature.resize(nv);
+  for (int v = 0; v < nv; ++v) m.curvature[v] = geo[v].largestCurvature();
+  std::vector<double> sorted = m.curvature;
+  std::nth_element(sorted.begin(), sorted.begin() + nv / 2, sorted.end());
+  const double typical = sorted[nv / 2];
+  const double eps = 0.25 * typical;
+  m.frame.resize(nv);
+  m.alignWeight.assign(nv, 0.0);
+  for (int v = 0; v < nv; ++v) {
+    const LocalGeometry& g = geo[v];
+    Frame& fr = m.frame[v];
+    fr.n = normalized(g.normal);
+    const bool firstFlatter = std::abs(g.k1) <= std::abs(g.k2);
+    fr.t = normalized(tangential(firstFlatter ? g.d1 : g.d2, fr.n));
+    if (!(norm(fr.t) > 0.5)) fr.t = normalized(tangential(std::abs(fr.n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY(), fr.n));
+    const double flat = std::min(std::abs(g.k1), std::abs(g.k2)), steep = std::max(std::abs(g.k1), std::abs(g.k2));
+    const double ratio = eps > 0 ? std::sqrt((steep + eps) / (flat + eps)) : 1.0;  // >= 1: the Dupin frame's aspect
+    fr.sigma = 1 / std::sqrt(std::min(ratio, anisotropy));
+    // Where the indicatrix is elongated beyond the bound, an equilateral triangle of the bounded frame is valid in
+    // any orientation only up to a remaining aspect of sqrt 3 (Props. 4, 5); with an edge along the flatter
+    // direction, at any aspect. So the field is held to that direction from kAlignFrom on, fully from kAlignFull.
+    // The aspect the bounded frame leaves, against the indicatrix itself (nearly unregularized: Props. 4 and 5 judge
+    // by the true curvature, and near a parabolic curve its aspect grows without bound).
+    const double aspect = eps > 0 ? std::sqrt((steep + kAlignEps * eps) / (flat + kAlignEps * eps)) : 1.0;
+    const double beyond = aspect / std::min(ratio, anisotropy);
+    m.alignWeight[v] = std::clamp((beyond - kAlignFrom) / (kAlignFull - kAlignFrom), 0.0, 1.0);
+  }
+  buildTopology(m);
+  return m;
+}
+
+}  // namespace phex::global

@@ -1,0 +1,145 @@
+// phex — the global triangulation's internal pieces (phex/global_triangulation.hpp says what the method does).
+#pragma once
+#include <cmath>
+#include <vector>
+
+#include "phex/geometry.hpp"
+#include "phex/global_triangulation.hpp"
+#include "phex/mesh.hpp"
+#include "phex/progress.hpp"
+#include "phex/surface.hpp"
+
+namespace phex::global {
+
+// Sums in a fixed order, so that native and WebAssembly builds round alike (see mesh_surface.cpp).
+inline double dot(const Vec3& a, const Vec3& b) { return a.x() * b.x() + a.y() * b.y() + a.z() * b.z(); }
+inline double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
+inline Vec3 cross(const Vec3& a, const Vec3& b) {
+  return Vec3(a.y() * b.z() - a.z() * b.y(), a.z() * b.x() - a.x() * b.z(), a.x() * b.y() - a.y() * b.x());
+}
+inline Vec3 normalized(const Vec3& a) {
+  const double n = norm(a);
+  return n > 0 ? Vec3(a / n) : a;
+}
+// `v` less its component along the unit normal `n`.
+inline Vec3 tangential(const Vec3& v, const Vec3& n) { return v - dot(v, n) * n; }
+// A tangent vector turned by 60 degrees about the unit normal `n` (counterclockwise seen from its tip).
+inline Vec3 rotate60(const Vec3& q, const Vec3& n) {
+  static const double s = 0.5 * std::sqrt(3.0);
+  return 0.5 * q + s * cross(n, q);
+}
+
+// The Dupin frame at a point: tangent vectors v map to D v = sigma (t.v) t + (b.v) b / sigma with b = n x t. The
+// axis t runs along the principal direction of least |curvature|, and D has determinant 1, so that areas keep
+// their size and a cell of edge h in the frame is one of about h in space. In D's image the Dupin indicatrix is a
+// circle (up to the bound on its anisotropy, 1 / sigma^2).
+struct Frame {
+  Vec3 n = Vec3::UnitZ(), t = Vec3::UnitX();
+  double sigma = 1;
+  Vec3 b() const { return cross(n, t); }
+  // Space -> Dupin frame, and back (tangent vectors; a normal component is dropped).
+  Vec3 toDupin(const Vec3& v) const {
+    const Vec3 bb = b();
+    return sigma * dot(t, v) * t + dot(bb, v) / sigma * bb;
+  }
+  Vec3 fromDupin(const Vec3& v) const {
+    const Vec3 bb = b();
+    return dot(t, v) / sigma * t + sigma * dot(bb, v) * bb;
+  }
+  // A vector of the tangent plane as coordinates (t, b) of the Dupin frame (`dupin`: v is in space, mapped by D).
+  Vec2 coords(const Vec3& v, bool dupin) const {
+    return dupin ? Vec2(sigma * dot(t, v), dot(b(), v) / sigma) : Vec2(dot(t, v), dot(b(), v));
+  }
+  Vec3 vector(const Vec2& c) const { return c.x() * t + c.y() * b(); }
+};
+
+// The discrete Levi-Civita transport of a direction q (in a's Dupin frame) to b's Dupin frame along the edge
+// e = x_b - x_a: the rotation that takes the edge's direction as a's frame sees it to the edge's direction as b's
+// frame sees it (an isometry of the two frames, unlike D_b D_a^-1, which shears where the frames' axes turn).
+inline Vec3 transport(const Vec3& q, const Frame& a, const Frame& b, const Vec3& e) {
+  const Vec2 ea = a.coords(e, true), eb = b.coords(e, true), qa = a.coords(q, false);
+  const double na = ea.norm(), nb = eb.norm();
+  if (!(na > 0) || !(nb > 0)) return b.vector(qa);
+  // (qa / ea) eb as complex numbers, ea and eb unit.
+  const Vec2 rel((qa.x() * ea.x() + qa.y() * ea.y()) / na, (qa.y() * ea.x() - qa.x() * ea.y()) / na);
+  return b.vector(Vec2((rel.x() * eb.x() - rel.y() * eb.y()) / nb, (rel.x() * eb.y() + rel.y() * eb.x()) / nb));
+}
+
+// The mesh the fields live on: the surface sampled finely (a few vertices per cell), each vertex with its frame.
+struct FieldMesh {
+  Points V;                         // #V by 3 points on the surface
+  Triangles F;                      // #F by 3, CCW seen from the normal side
+  std::vector<Frame> frame;         // #V
+  std::vector<double> area;         // #V: a third of the incident triangles' areas
+  std::vector<double> curvature;    // #V: largest |principal curvature|
+  std::vector<double> alignWeight;  // #V in [0, 1]: how anisotropic the (bounded) Dupin metric is
+  std::vector<int> start, adjacent; // vertex adjacency in compressed rows, each row sorted
+  std::vector<std::vector<int>> loops;  // boundary loops, vertex ids in order with the surface on the left
+  std::vector<char> boundary;       // #V
+  std::vector<Vec3> boundaryTangent;  // #V: unit tangent of the boundary at boundary vertices (zero elsewhere)
+  std::vector<int> component;       // #V: connected component
+  int components = 0;
+  double edgeMean = 0;
+  int vertexCount() const { return static_cast<int>(V.rows()); }
+  Vec3 point(int v) const { return V.row(v).transpose(); }
+};
+
+// Samples `surface` with edges of about `edge` (an uploaded mesh split k x k, an analytic surface on its parameter
+// lattice) and sets the frames: the Dupin metric bounded to `anisotropy`, regularized where |curvature| is small
+// against the surface's typical curvature.
+FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, const CancelFlag* cancel);
+
+// One level of the multiresolution hierarchy the fields are smoothed on (level 0: the field mesh itself).
+struct Level {
+  std::vector<Vec3> x;
+  std::vector<Frame> frame;
+  std::vector<double> area, alignWeight, scale;  // scale: the cell's factor at this vertex (curvature sizing)
+  std::vector<Vec3> target;      // the alignment target, a tangent direction in space (zero: none)
+  std::vector<char> fixed;       // 1: the direction is fixed to `target` (boundary)
+  std::vector<int> start, adjacent;
+  std::vector<int> colorStart, colorOrder;  // vertices grouped by colour: no two neighbours share one
+  std::vector<int> parent;       // #x: its vertex on the next coarser level (empty on the coarsest)
+  int size() const { return static_cast<int>(x.size()); }
+};
+std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& scale);
+// Sets the cell's factor on level 0 and, area-weighted, on the coarser levels.
+void setScale(std::vector<Level>& levels, const std::vector<double>& scale);
+
+// The 6-fold field: per level (level 0 first) and vertex, a unit tangent direction in the Dupin frame (the five others are it
+// turned by multiples of 60 degrees). Smoothed coarse to fine by Gauss-Seidel sweeps over colours.
+std::vector<std::vector<Vec3>> orientationField(std::vector<Level>& levels, double alignment, const ProgressFn& progress,
+                                   const CancelFlag* cancel);
+// Of the six lattice directions of q (Dupin frame at `a`) carried to `b` along e = x_b - x_a (transport), the one
+// nearest `reference` (Dupin frame at b); `turns` gets which (q turned by turns x 60 degrees at a).
+Vec3 matchDirection(const Vec3& reference, const Frame& b, const Vec3& q, const Frame& a, const Vec3& e,
+                    int* turns = nullptr);
+// The index (in sixths of a turn) of the field around triangle (i, j, k) of the field mesh: 0 where it is regular.
+int singularityIndex(const FieldMesh& mesh, const std::vector<Vec3>& q, int i, int j, int k);
+
+// Per vertex of the field mesh, the factor of the cell that makes the lattice along the field `q` integrable where
+// it can be (scale.cpp): e^phi with grad phi = -J omega in least squares, omega the field's turn against parallel
+// transport, `strength` in [0, 1] scaling omega (0: uniform cells). Normalized to the uniform cell's mean area.
+std::vector<double> integrableScale(const FieldMesh& mesh, const std::vector<Vec3>& q, double strength);
+
+// The position field: per vertex of level 0, the lattice point nearest to it (a point of its tangent plane) of
+// the triangular lattice of edge cell * scale along the field's directions (Dupin frame).
+std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vector<Vec3>>& fields, double cell,
+                                const ProgressFn& progress, const CancelFlag* cancel);
+
+// The lattice's points as a triangle mesh: sites from the position field, boundary sites along the boundary
+// loops, connected as the dual of their Voronoi regions on the field mesh. Notes say what was done.
+struct Extraction {
+  TriMesh mesh;
+  std::vector<std::string> notes;
+  int repairs = 0;  // sites added or removed until the regions' dual was a manifold of the surface's topology
+};
+Extraction extractTriangulation(const Surface& surface, const FieldMesh& mesh, const std::vector<Vec3>& q,
+                                const std::vector<Vec3>& o, const std::vector<double>& scale, double cell,
+                                const CancelFlag* cancel);
+
+// Euler characteristic of a triangle mesh (V - E + F) and its number of boundary loops.
+struct Topology {
+  int chi = 0, loops = 0;
+};
+
+}  // namespace phex::global

@@ -1,0 +1,135 @@
+// phex — the global method's triangular lattice along the 6-fold field: a position field (6-PoSy), smoothed on the
+// same hierarchy as the directions.
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+
+#include "global.hpp"
+#include "phex/parallel.hpp"
+
+namespace phex::global {
+namespace {
+
+constexpr int kSweepGrain = 1024;
+int sweepsAt(int level, int levels) { static int f = getenv("PHEX_PS") ? atoi(getenv("PHEX_PS")) : 16; return level + 1 == levels ? 40 : level == 0 ? f : 12; }
+
+// The lattice of one vertex: origin o, edge vectors U and V = U turned by 60 degrees in the Dupin frame.
+struct Lattice {
+  Vec3 o, U, V;
+};
+Lattice latticeAt(const Level& L, const std::vector<Vec3>& Q, const std::vector<Vec3>& O, int v, double cell) {
+  const Frame& f = L.frame[v];
+  const double h = cell * L.scale[v];
+  return {O[v], h * f.fromDupin(Q[v]), h * f.fromDupin(rotate60(Q[v], f.n))};
+}
+
+// The lattice point nearest to p (p's tangential part, in the lattice's Dupin metric: the lattice is equilateral
+// there). Coordinates (a, b) of p - o in the basis (U, V), then the best of the four corners around them by
+// a^2 + ab + b^2, the squared length of a U + b V in units of the edge.
+Vec3 nearestPoint(const Lattice& lat, const Vec3& p) {
+  const Vec3 d = p - lat.o;
+  const double uu = dot(lat.U, lat.U), uv = dot(lat.U, lat.V), vv = dot(lat.V, lat.V);
+  const double du = dot(lat.U, d), dv = dot(lat.V, d);
+  const double det = uu * vv - uv * uv;
+  if (!(det > 0)) return lat.o;
+  const double a = (vv * du - uv * dv) / det, b = (uu * dv - uv * du) / det;
+  const double a0 = std::floor(a), b0 = std::floor(b);
+  double best = std::numeric_limits<double>::infinity(), ba = a0, bb = b0;
+  for (int i = 0; i < 4; ++i) {
+    const double ca = a0 + (i & 1), cb = b0 + (i >> 1);
+    const double ea = a - ca, eb = b - cb;
+    const double cost = ea * ea + ea * eb + eb * eb;
+    if (cost < best) best = cost, ba = ca, bb = cb;
+  }
+  return lat.o + ba * lat.U + bb * lat.V;
+}
+
+// The rotation taking unit normal a to unit normal b by the shortest way (about a x b), applied to v.
+Vec3 rotateInto(const Vec3& v, const Vec3& a, const Vec3& b) {
+  const double c = dot(a, b);
+  const Vec3 axis = cross(a, b);
+  if (c > 1 - 1e-12 || c < -0.5) return v;
+  return v * c + cross(axis, v) + axis * (dot(axis, v) / (1 + c));
+}
+
+// The point nearest to both tangent planes' points p0, p1 (least squares to p0 and p1 on both planes): where the
+// two planes, hinged on their line of intersection, are compared.
+Vec3 middlePoint(const Vec3& p0, const Vec3& n0, const Vec3& p1, const Vec3& n1) {
+  const double n0p0 = dot(n0, p0), n0p1 = dot(n0, p1), n1p0 = dot(n1, p0), n1p1 = dot(n1, p1), n0n1 = dot(n0, n1);
+  const double denominator = 1 / (1 - n0n1 * n0n1 + 1e-4);
+  const double l0 = 2 * (n0p1 - n0p0 - n0n1 * (n1p0 - n1p1)) * denominator;
+  const double l1 = 2 * (n1p0 - n1p1 - n0n1 * (n0p1 - n0p0)) * denominator;
+  return 0.5 * (p0 + p1) - 0.25 * (n0 * l0 + n1 * l1);
+}
+
+// Vertex u's lattice turned into the tangent plane of vertex v about the planes' hinge (the surface between them
+// unbent), so that lattice points near v compare as on the surface, not across its bend.
+Lattice hinged(const Lattice& lat, const Vec3& xu, const Vec3& nu, const Vec3& xv, const Vec3& nv) {
+  const Vec3 hinge = middlePoint(xv, nv, xu, nu);
+  return {hinge + rotateInto(lat.o - hinge, nu, nv), rotateInto(lat.U, nu, nv), rotateInto(lat.V, nu, nv)};
+}
+
+// `p` moved into the tangent plane at x with normal n.
+Vec3 intoPlane(const Vec3& p, const Vec3& x, const Vec3& n) { return p - dot(p - x, n) * n; }
+
+// A boundary vertex's lattice point lies on the boundary's tangent line (a row of the lattice runs along the
+// boundary: its direction is fixed there), at the lattice step nearest the vertex.
+Vec3 ontoBoundary(const Vec3& o, const Vec3& x, const Vec3& tangent, const Vec3& U) {
+  Vec3 p = x + dot(o - x, tangent) * tangent;
+  const double step = norm(U);
+  if (step > 0) p += std::round(dot(x - p, tangent) / step) * step * tangent;
+  return p;
+}
+
+}  // namespace
+
+std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vector<Vec3>>& fields, double cell,
+                                const ProgressFn& progress, const CancelFlag* cancel) {
+  const int count = static_cast<int>(levels.size());
+  std::vector<Vec3> O, parentO;
+  for (int l = count - 1; l >= 0; --l) {
+    checkCancel(cancel);
+    const Level& L = levels[l];
+    const std::vector<Vec3>& Q = fields[l];
+    O.assign(L.size(), Vec3::Zero());
+    for (int v = 0; v < L.size(); ++v) {
+      const Vec3 start = l == count - 1 ? L.x[v] : intoPlane(parentO[L.parent[v]], L.x[v], L.frame[v].n);
+      Lattice lat = latticeAt(L, Q, O, v, cell);
+      lat.o = start;
+      O[v] = intoPlane(nearestPoint(lat, L.x[v]), L.x[v], L.frame[v].n);
+      if (L.fixed[v]) O[v] = ontoBoundary(O[v], L.x[v], L.target[v], lat.U);
+    }
+    const int sweeps = sweepsAt(l, count);
+    for (int s = 0; s < sweeps; ++s) {
+      for (int c = 0; c + 1 < static_cast<int>(L.colorStart.size()); ++c) {
+        const int begin = L.colorStart[c], end = L.colorStart[c + 1];
+        parallelRanges(end - begin, kSweepGrain, [&](int b, int e) {
+          for (int k = begin + b; k < begin + e; ++k) {
+            const int v = L.colorOrder[k];
+            const Vec3& x = L.x[v];
+            const Vec3& n = L.frame[v].n;
+            Vec3 sum = O[v];
+            double weight = 0;
+            for (int i = L.start[v]; i < L.start[v + 1]; ++i) {
+              const int u = L.adjacent[i];
+              const Lattice lu = hinged(latticeAt(L, Q, O, u, cell), L.x[u], L.frame[u].n, x, n);
+              const Vec3 p = intoPlane(nearestPoint(lu, sum), x, n);
+              sum = (sum * weight + p) / (weight + 1);
+              weight += 1;
+            }
+            Lattice own = latticeAt(L, Q, O, v, cell);
+            own.o = sum;
+            Vec3 o = intoPlane(nearestPoint(own, x), x, n);
+            if (L.fixed[v]) o = ontoBoundary(o, x, L.target[v], own.U);
+            O[v] = o;
+          }
+        });
+      }
+    }
+    parentO.swap(O);
+    if (progress) progress({"triangulate", 0.3 + 0.2 * double(count - l) / count, "lattice, level " + std::to_string(l)});
+  }
+  return parentO;
+}
+
+}  // namespace phex::global

@@ -1,0 +1,152 @@
+// phex — the cell's scale along the 6-fold field that makes its lattice integrable: where the field turns (on
+// curved surfaces it must), a lattice of one size cannot follow it without dislocations (pentagon-heptagon pairs,
+// a row more on one side than on the other); one whose size varies as e^phi with grad phi = -J omega can, omega
+// being the field's rotation against the metric's parallel transport.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+
+#include "global.hpp"
+#include "phex/parallel.hpp"
+
+namespace phex::global {
+namespace {
+
+// e^x with +, -, *, / alone (libm's exp may differ between platforms in the last bit): the Taylor series of
+// e^(x / 2^16), squared 16 times.
+double exponential(double x) {
+  const double y = x / 65536.0;
+  double term = 1, sum = 1;
+  for (int k = 1; k <= 7; ++k) term *= y / k, sum += term;
+  for (int k = 0; k < 16; ++k) sum *= sum;
+  return sum;
+}
+
+
+}  // namespace
+
+std::vector<double> integrableScale(const FieldMesh& m, const std::vector<Vec3>& q, double strength) {
+  const int nv = m.vertexCount(), nf = static_cast<int>(m.F.rows());
+  std::vector<double> scale(nv, 1.0);
+  if (strength == 0) return scale;
+  // Triangles at or next to a singular point carry its turn (+-60 degrees), which no smooth scale absorbs.
+  std::vector<char> nearSingular(nv, 0);
+  for (int f = 0; f < nf; ++f)
+    if (singularityIndex(m, q, m.F(f, 0), m.F(f, 1), m.F(f, 2)) != 0)
+      for (int c = 0; c < 3; ++c) nearSingular[m.F(f, c)] = 1;
+  // Per triangle, the lattice coordinates' increments along its edges (the lattice of unit cell at each corner, its
+  // directions matched to corner 0's): c_e = (alpha_a + alpha_b)(x_b - x_a) / 2 with alpha the coframe dual to the
+  // corner's lattice vectors. Integrable: sum_e e^-phi_e c_e = 0 around every triangle (phi_e the mean of its ends).
+  struct Tri {
+    Vec2 c[3];  // edges 0->1, 1->2, 2->0
+    bool use = false;
+  };
+  std::vector<Tri> tris(nf);
+  parallelRanges(nf, 4096, [&](int begin, int end) {
+    for (int f = begin; f < end; ++f) {
+      const int c[3] = {m.F(f, 0), m.F(f, 1), m.F(f, 2)};
+      Tri& t = tris[f];
+      if (nearSingular[c[0]] || nearSingular[c[1]] || nearSingular[c[2]]) continue;
+      Vec3 U[3], V[3];
+      for (int k = 0; k < 3; ++k) {
+        const Frame& fk = m.frame[c[k]];
+        // Corner k's direction that, carried to corner 0, is nearest corner 0's.
+        int turns = 0;
+        if (k > 0) matchDirection(q[c[0]], m.frame[c[0]], q[c[k]], fk, m.point(c[0]) - m.point(c[k]), &turns);
+        Vec3 own = q[c[k]];
+        for (int r = 0; r < turns; ++r) own = rotate60(own, fk.n);
+        U[k] = fk.fromDupin(own), V[k] = fk.fromDupin(rotate60(own, fk.n));
+      }
+      auto coords = [&](int k, const Vec3& e) {  // alpha_k(e): e in the basis U[k], V[k]
+        const double uu = dot(U[k], U[k]), uv = dot(U[k], V[k]), vv = dot(V[k], V[k]);
+        const double du = dot(U[k], e), dv = dot(V[k], e), det = uu * vv - uv * uv;
+        return Vec2((vv * du - uv * dv) / det, (uu * dv - uv * du) / det);
+      };
+      for (int k = 0; k < 3; ++k) {
+        const int a = k, b = (k + 1) % 3;
+        const Vec3 e = m.point(c[b]) - m.point(c[a]);
+        t.c[k] = 0.5 * (coords(a, e) + coords(b, e));
+      }
+      t.use = t.c[0].allFinite() && t.c[1].allFinite() && t.c[2].allFinite();
+    }
+  });
+  if (getenv("PHEX_DBG")) {
+    double cs = 0, cc = 0; int n = 0;
+    for (const Tri& t : tris) if (t.use) { cs += (t.c[0] + t.c[1] + t.c[2]).norm(); cc += t.c[0].norm(); ++n; }
+    fprintf(stderr, "curl mean %.4g, |c| mean %.4g over %d triangles\n", cs / n, cc / n, n);
+  }
+  // Gauss-Newton on phi: per triangle, sum_e w_e c_e (1 - (dphi_a + dphi_b) / 2) = 0 with w_e = e^-phi_e, plus a
+  // light smoothness term (the graph Laplacian, weight kSmooth) that keeps phi defined where no triangle constrains it.
+  double squares = 0;
+  int used = 0;
+  for (const Tri& t : tris)
+    if (t.use) squares += t.c[0].squaredNorm() + t.c[1].squaredNorm() + t.c[2].squaredNorm(), used += 3;
+  const double kSmooth = 1e-3 * (used > 0 ? squares / used : 1.0);
+  std::vector<double> phi(nv, 0.0), weight(nv, 1.0);
+  for (int step = 0; step < 3; ++step) {
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(9 * static_cast<std::size_t>(nf) + 2 * m.adjacent.size() + nv);
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nv);
+    for (int f = 0; f < nf; ++f) {
+      const Tri& t = tris[f];
+      if (!t.use) continue;
+      const int c[3] = {m.F(f, 0), m.F(f, 1), m.F(f, 2)};
+      // Row r (x and y) of J dphi = curl: the coefficient of dphi at corner k.
+      double J[2][3] = {{0, 0, 0}, {0, 0, 0}};
+      Vec2 curl = Vec2::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const int a = k, b = (k + 1) % 3;
+        const double w = 1 / std::sqrt(weight[c[a]] * weight[c[b]]);  // e^-(phi_a + phi_b) / 2
+        const Vec2 wc = w * t.c[k];
+        curl += wc;
+        for (int r = 0; r < 2; ++r) J[r][a] += 0.5 * wc(r), J[r][b] += 0.5 * wc(r);
+      }
+      // Less the triangle's mean: a uniform change of scale leaves a lattice as (non-)integrable as it is, and the
+      // linear term alone would take shrinking everything for a cure.
+      for (int r = 0; r < 2; ++r)
+        for (int k = 0; k < 3; ++k) J[r][k] -= curl(r) / 3;
+      for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) entries.emplace_back(c[a], c[b], J[0][a] * J[0][b] + J[1][a] * J[1][b]);
+        rhs(c[a]) += J[0][a] * curl(0) + J[1][a] * curl(1);
+      }
+    }
+    for (int v = 0; v < nv; ++v) {
+      const int degree = m.start[v + 1] - m.start[v];
+      entries.emplace_back(v, v, kSmooth * (degree + 1e-3));
+      for (int i = m.start[v]; i < m.start[v + 1]; ++i) {
+        entries.emplace_back(v, m.adjacent[i], -kSmooth);
+        rhs(v) -= kSmooth * (phi[v] - phi[m.adjacent[i]]);
+      }
+    }
+    Eigen::SparseMatrix<double> K(nv, nv);
+    K.setFromTriplets(entries.begin(), entries.end());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(K);
+    if (solver.info() != Eigen::Success) break;
+    Eigen::VectorXd delta = solver.solve(rhs);
+    // The constant is free (a uniform scale leaves the lattice as integrable): the mean step is taken out.
+    delta.array() -= delta.mean();
+    for (int v = 0; v < nv; ++v) {
+      phi[v] = std::clamp(phi[v] + strength * delta(v), -0.6, 0.6);
+      weight[v] = exponential(phi[v]);
+    }
+    if (getenv("PHEX_DBG")) {
+      double lo = 0, hi = 0;
+      for (double x : phi) lo = std::min(lo, x), hi = std::max(hi, x);
+      fprintf(stderr, "step %d: phi %.3f .. %.3f, |delta| %.3g\n", step, lo, hi, delta.norm());
+    }
+  }
+  // The mean cell area kept: sum A e^(-2 phi) = sum A.
+  double area = 0, weighted = 0;
+  for (int v = 0; v < nv; ++v) {
+    scale[v] = exponential(phi[v]);
+    area += m.area[v], weighted += m.area[v] / (scale[v] * scale[v]);
+  }
+  const double k = weighted > 0 ? std::sqrt(weighted / area) : 1.0;
+  for (double& s : scale) s *= k;
+  return scale;
+}
+
+}  // namespace phex::global
