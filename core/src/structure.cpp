@@ -520,41 +520,62 @@ Structure buildStructure(const PolyMesh& mesh, const StructureOptions& options) 
   StructureModel& model = s.model;
   model.origin = boxOrigin(mesh.V);
   const Eigen::RowVector3d o = model.origin.transpose();
-  // Panels: each face between its plane and the plane shifted by t; the bottom and top triangulated alike (ear
-  // clipping in the face's plane, so non-convex faces stay inside their outline), the sides one quad per edge.
+  // Panels: each face between its plane and the plane shifted by t; the bottom and top triangulated alike (a fan
+  // for a convex face, ear clipping in the face's plane for a non-convex one, so it stays inside its outline), the
+  // sides one quad per edge. Written straight into the arrays: this and the beams are most of the structure's time.
   {
     SolidPart& part = model.panels;
-    part.elements = mesh.faceCount();
-    const int corners = static_cast<int>(mesh.indices.size());
+    const int nf = mesh.faceCount(), corners = static_cast<int>(mesh.indices.size());
+    part.elements = nf;
     part.V.resize(2 * corners, 3);
-    std::vector<int> tris, ids, fan;
-    std::vector<double> xyz;
-    for (int f = 0; f < mesh.faceCount(); ++f) {
+    part.F.resize(4 * corners - 4 * nf, 3);  // n - 2 at the bottom and at the top, 2 n at the sides
+    part.element.resize(part.F.rows());
+    double* V = part.V.data();
+    int* F = part.F.data();
+    int t = 0;
+    std::vector<int> ids, fan;
+    for (int f = 0; f < nf; ++f) {
       const int n = mesh.faceSize(f), base = 2 * mesh.offsets[f];
       const int* id = mesh.face(f);
-      for (int k = 0; k < n; ++k) {
-        part.V.row(base + k) = ax.position.row(id[k]) - o;
-        part.V.row(base + n + k) = top.V.row(id[k]) - o;
-      }
-      ids.resize(n);
-      std::iota(ids.begin(), ids.end(), 0);
+      for (int k = 0; k < n; ++k)
+        for (int c = 0; c < 3; ++c) {
+          V[3 * (base + k) + c] = ax.position(id[k], c) - o[c];
+          V[3 * (base + n + k) + c] = top.V(id[k], c) - o[c];
+        }
+      // A fan from the first corner whose fan triangles all turn like the face (any corner of a convex face; a
+      // reflex one of the K < 0 hexagons, §3); ear clipping where there is none.
       fan.clear();
-      if (ax.convex[f])
-        for (int k = 1; k + 1 < n; ++k) fan.insert(fan.end(), {0, k, k + 1});
-      else
-        triangulatePolygon(ids, part.V.row(base).data(), fan);
-      const std::size_t before = tris.size();
-      for (std::size_t t = 0; t < fan.size(); t += 3) {
-        tris.insert(tris.end(), {base + fan[t], base + fan[t + 2], base + fan[t + 1]});             // bottom, reversed
-        tris.insert(tris.end(), {base + n + fan[t], base + n + fan[t + 1], base + n + fan[t + 2]});  // top
+      auto corner = [&](int k) { return Vec3(V[3 * (base + k)], V[3 * (base + k) + 1], V[3 * (base + k) + 2]); };
+      const Vec3& normal = ax.planes[f].normal;
+      int apex = ax.convex[f] ? 0 : -1;
+      for (int j = 0; j < n && apex < 0; ++j) {
+        bool turns = true;
+        for (int k = 1; k + 1 < n && turns; ++k)
+          turns = (corner((j + k) % n) - corner(j)).cross(corner((j + k + 1) % n) - corner(j)).dot(normal) > 0;
+        if (turns) apex = j;
+      }
+      if (apex >= 0) {
+        for (int k = 1; k + 1 < n; ++k) fan.insert(fan.end(), {apex, (apex + k) % n, (apex + k + 1) % n});
+      } else {
+        ids.resize(n);
+        std::iota(ids.begin(), ids.end(), 0);
+        triangulatePolygon(ids, V + 3 * base, fan);
+      }
+      const int first = t;
+      auto add = [&](int a, int b, int c) { F[3 * t] = a, F[3 * t + 1] = b, F[3 * t + 2] = c, ++t; };
+      for (std::size_t k = 0; k + 2 < fan.size(); k += 3) {
+        add(base + fan[k], base + fan[k + 2], base + fan[k + 1]);              // bottom, reversed
+        add(base + n + fan[k], base + n + fan[k + 1], base + n + fan[k + 2]);  // top
       }
       for (int k = 0; k < n; ++k) {
         const int a = base + k, b = base + (k + 1) % n;
-        tris.insert(tris.end(), {a, b, b + n, a, b + n, a + n});
+        add(a, b, b + n);
+        add(a, b + n, a + n);
       }
-      part.element.insert(part.element.end(), (tris.size() - before) / 3, f);
+      std::fill(part.element.begin() + first, part.element.begin() + t, f);
     }
-    part.F = Eigen::Map<const Triangles>(tris.data(), static_cast<Eigen::Index>(tris.size() / 3), 3);
+    part.F.conservativeResize(t, 3);  // a polygon ear clipping leaves unfinished has fewer triangles
+    part.element.resize(t);
   }
   // Beams: each quad thickened by the width across its plane, half to either side.
   {
@@ -564,20 +585,22 @@ Structure buildStructure(const PolyMesh& mesh, const StructureOptions& options) 
     part.V.resize(8 * nb, 3);
     part.F.resize(12 * nb, 3);
     part.element.resize(12 * nb);
+    double* V = part.V.data();
+    int* F = part.F.data();
+    // The quad turns counterclockwise about its normal: the + side (corners 4..7) keeps its order, the - side
+    // (0..3) reverses it, and each side quad turns outwards.
+    static constexpr int kBox[12][3] = {{4, 5, 6}, {4, 6, 7}, {0, 2, 1}, {0, 3, 2}, {0, 1, 5}, {0, 5, 4},
+                                        {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
     for (int i = 0; i < nb; ++i) {
       const Beam& b = s.beams.beams[i];
       const Vec3 half = 0.5 * s.beamWidth * b.normal;
-      for (int k = 0; k < 4; ++k) {
-        part.V.row(8 * i + k) = (b.corners[k] - half).transpose() - o;
-        part.V.row(8 * i + 4 + k) = (b.corners[k] + half).transpose() - o;
-      }
-      const int v = 8 * i;
-      // The quad turns counterclockwise about its normal: the + side keeps its order, the - side reverses it.
-      const int faces[12][3] = {{v + 4, v + 5, v + 6}, {v + 4, v + 6, v + 7}, {v, v + 2, v + 1}, {v, v + 3, v + 2},
-                                {v, v + 1, v + 5},     {v, v + 5, v + 4},     {v + 1, v + 2, v + 6}, {v + 1, v + 6, v + 5},
-                                {v + 2, v + 3, v + 7}, {v + 2, v + 7, v + 6}, {v + 3, v, v + 4}, {v + 3, v + 4, v + 7}};
+      for (int k = 0; k < 4; ++k)
+        for (int c = 0; c < 3; ++c) {
+          V[3 * (8 * i + k) + c] = b.corners[k][c] - half[c] - o[c];
+          V[3 * (8 * i + 4 + k) + c] = b.corners[k][c] + half[c] - o[c];
+        }
       for (int t = 0; t < 12; ++t) {
-        part.F.row(12 * i + t) << faces[t][0], faces[t][1], faces[t][2];
+        for (int c = 0; c < 3; ++c) F[3 * (12 * i + t) + c] = 8 * i + kBox[t][c];
         part.element[12 * i + t] = i;
       }
     }
