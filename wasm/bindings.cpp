@@ -511,26 +511,20 @@ val structure(val mesh, val options) {
       if (k != phex::NodeKind::Free) withPanels += count;
     }
     report.set("nodesByKind", kinds);
-    report.set("nodeCount", withPanels);
-    report.set("beamCount", static_cast<int>(nb));
-    report.set("beamLength", s.beams.length);
-    report.set("beamHeight", s.beams.height);
-    report.set("beamWidth", s.beamWidth);
-    report.set("panelThickness", s.panelThickness);
     report.set("offset", o.offset ? val(*o.offset) : val::null());
     val range = val::array();
     range.call<void>("push", ax.offsetMin);
     range.call<void>("push", ax.offsetMax);
     report.set("offsetRange", range);
-    report.set("boundaryBeams", ax.boundaryBeams);
-    report.set("boundaryBeamsPlanar", ax.boundaryBeamsPlanar);
-    report.set("boundaryRuns", ax.boundaryRuns);
-    report.set("boundaryRunsPlanar", ax.boundaryRunsPlanar);
-    report.set("boundaryTwistMaxDeg", ax.boundaryTwistMaxDeg);
-    report.set("boundaryTurnMaxDeg", ax.boundaryTurnMaxDeg);
-    report.set("beamPlanarityMax", s.beams.planarityMax);
-    report.set("interiorBeamPlanarityMax", s.beams.interiorPlanarityMax);
-    report.set("nodesMovedOntoPlanesMax", ax.snapMax);
+    for (const auto& [name, value] : std::initializer_list<std::pair<const char*, double>>{
+             {"nodeCount", withPanels}, {"beamCount", static_cast<double>(nb)}, {"beamLength", s.beams.length},
+             {"beamHeight", s.beams.height}, {"beamWidth", s.beamWidth}, {"panelThickness", s.panelThickness},
+             {"boundaryBeams", ax.boundaryBeams}, {"boundaryBeamsPlanar", ax.boundaryBeamsPlanar},
+             {"boundaryRuns", ax.boundaryRuns}, {"boundaryRunsPlanar", ax.boundaryRunsPlanar},
+             {"boundaryTwistMaxDeg", ax.boundaryTwistMaxDeg}, {"boundaryTurnMaxDeg", ax.boundaryTurnMaxDeg},
+             {"beamPlanarityMax", s.beams.planarityMax}, {"interiorBeamPlanarityMax", s.beams.interiorPlanarityMax},
+             {"nodesMovedOntoPlanesMax", ax.snapMax}})
+      report.set(name, value);
     val notes = val::array();
     for (const auto* list : {&ax.notes, &s.notes})
       for (const std::string& n : *list) notes.call<void>("push", n);

@@ -187,8 +187,8 @@ PolyMesh shifted(const PolyMesh& mesh, const NodeAxes& ax, double d) {
 }
 
 std::string edgeName(const MeshEdge& e) {
-  return "the edge between nodes " + std::to_string(e.a + 1) + " and " + std::to_string(e.b + 1) + " (" + panelLabel(e.left) +
-         (e.right >= 0 ? ", " + panelLabel(e.right) : std::string()) + ")";
+  return "the edge between nodes " + std::to_string(e.a + 1) + " and " + std::to_string(e.b + 1) + " of panel " + panelLabel(e.left) +
+         (e.right >= 0 ? " (and " + panelLabel(e.right) + ")" : std::string());
 }
 
 std::string rangeText(const NodeAxes& ax) {
@@ -212,8 +212,7 @@ void checkShifted(const PolyMesh& mesh, const NodeAxes& ax, const PolyMesh& out,
     }
     throw Error(ErrorCode::InvalidParameter,
                 name + " = " + formatNumber(value) + (d == value ? "" : " (face distance " + formatNumber(d) + ")") +
-                    " is more than the offset can take: " + edgeName(ax.edges[worst]) + " of panel " +
-                    panelLabel(ax.edges[worst].left) + " vanishes at face distance " + formatNumber(at) + "; " + rangeText(ax));
+                    " is more than the offset can take: " + edgeName(ax.edges[worst]) + " vanishes at face distance " + formatNumber(at) + "; " + rangeText(ax));
   }
   if (!crossing) return;
   for (int f = 0; f < mesh.faceCount(); ++f) {
