@@ -8,7 +8,7 @@ ceres_wasm="$cache/ceres-wasm"
 sudo=""; [ "$(id -u)" = 0 ] || sudo="sudo"
 
 need_pkgs=()
-for p in g++ cmake ninja-build make libeigen3-dev libceres-dev catch2 nlohmann-json3-dev libfast-float-dev emscripten chromium nodejs dpkg-dev; do
+for p in g++ cmake ninja-build make libeigen3-dev libceres-dev catch2 nlohmann-json3-dev libfast-float-dev libtinygltf-dev emscripten chromium nodejs dpkg-dev; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || need_pkgs+=("$p")
 done
 if [ ${#need_pkgs[@]} -gt 0 ]; then

@@ -165,10 +165,12 @@ class TextReader {
   std::string name_;
 };
 
+}  // namespace
+
 // ---------------------------------------------------------------------------------------------------
 // Polygons become triangles by ear clipping in the polygon's Newell plane, so non-convex faces stay inside
 // their outline; a polygon with no ear left (self-intersecting or degenerate) is finished as a fan.
-void triangulatePolygon(const std::vector<int>& ids, const std::vector<double>& xyz, std::vector<int>& tri) {
+void triangulatePolygon(const std::vector<int>& ids, const double* xyz, std::vector<int>& tri) {
   const int n = static_cast<int>(ids.size());
   if (n == 3) {
     tri.insert(tri.end(), ids.begin(), ids.end());
@@ -209,6 +211,8 @@ void triangulatePolygon(const std::vector<int>& ids, const std::vector<double>& 
   }
   for (std::size_t i = 1; i + 1 < rest.size(); ++i) tri.insert(tri.end(), {ids[rest[0]], ids[rest[i]], ids[rest[i + 1]]});
 }
+
+namespace {
 
 // ---------------------------------------------------------------------------------------------------
 // OBJ: `v x y z [w]` and `f a b c ...` with a = i, i/t, i//n or i/t/n (negative i counts back from the
@@ -256,7 +260,7 @@ RawMesh readObj(const std::uint8_t* data, std::size_t size, const std::string& n
   std::vector<int> ids;
   for (std::size_t f = 0; f + 1 < offsets.size(); ++f) {
     ids.assign(polygonIds.begin() + offsets[f], polygonIds.begin() + offsets[f + 1]);
-    triangulatePolygon(ids, mesh.xyz, mesh.tri);
+    triangulatePolygon(ids, mesh.xyz.data(), mesh.tri);
   }
   return mesh;
 }
@@ -302,7 +306,7 @@ RawMesh readOff(const std::uint8_t* data, std::size_t size, const std::string& n
                 std::to_string(nv) + " vertices, counted from 0)");
       ids.push_back(static_cast<int>(i));
     }
-    triangulatePolygon(ids, mesh.xyz, mesh.tri);
+    triangulatePolygon(ids, mesh.xyz.data(), mesh.tri);
     checkTriangleLimit(name, mesh.tri.size() / 3);
     in.skipLine();
   }
@@ -540,7 +544,7 @@ RawMesh readPly(const std::uint8_t* data, std::size_t size, const std::string& n
           ids.push_back(static_cast<int>(x));
         }
         if (keep) {
-          triangulatePolygon(ids, mesh.xyz, mesh.tri);
+          triangulatePolygon(ids, mesh.xyz.data(), mesh.tri);
           checkTriangleLimit(name, mesh.tri.size() / 3);
         }
       }

@@ -64,6 +64,9 @@ export async function loadEngine() {
     fabrication(mesh, options) {
       return answer(core.fabrication(mesh, options));
     },
+    structure(mesh, options) {
+      return answer(core.structure(mesh, options));
+    },
     /** Lets the last upload's surface go (see PHex.clearUploadCache). */
     clearUploadCache() {
       if (typeof core.clearUploadCache === 'function') core.clearUploadCache();
@@ -92,7 +95,7 @@ function serve() {
     ({ version, surfaces, capabilities }) => postMessage({ type: 'ready', info: { version, surfaces, capabilities } }),
     (error) => postMessage({ type: 'failed', message: `could not load the phex wasm module: ${error?.message ?? error}` }),
   );
-  const METHODS = ['run', 'surfacePreview', 'memory', 'fabrication', 'clearUploadCache'];
+  const METHODS = ['run', 'surfacePreview', 'memory', 'fabrication', 'structure', 'clearUploadCache'];
   addEventListener('message', async ({ data }) => {
     if (data?.type !== 'call' || !METHODS.includes(data.method)) return;
     const engine = await ready;

@@ -52,4 +52,9 @@ TriMesh readMeshBytes(const std::uint8_t* data, std::size_t size, const std::str
 // keeping the order of the others.
 TriMesh cleanTriMesh(const TriMesh& raw, const std::string& name, MeshReadReport* report = nullptr);
 
+// Appends the triangles of one polygon to `tri` (vertex ids, three per triangle, turning as the polygon does): ear
+// clipping in the polygon's Newell plane, so a non-convex face stays inside its outline; a polygon with no ear
+// left (self-intersecting or degenerate) is finished as a fan. `ids` index the points of `xyz` (x, y, z each).
+void triangulatePolygon(const std::vector<int>& ids, const double* xyz, std::vector<int>& tri);
+
 }  // namespace phex
