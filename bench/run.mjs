@@ -5,6 +5,7 @@
 //   PHEX_BENCH_SIZES=1000     only these face counts (comma-separated; overrides PHEX_BENCH_QUICK)
 //   PHEX_BENCH_SURFACES=torus only these surfaces (comma-separated: torus, cyclide, wave-roof.obj, freeform.obj)
 //   PHEX_BENCH_REPEAT=5       runs per case up to 10k faces, median reported (one run above 10k)
+//   PHEX_BENCH_GLOBAL=0       without the global method's cases (a 20k-triangle upload at 10k and 100k faces)
 //   PHEX_BENCH_CERES_100K=1   also the Ceres solvers above 10k faces (planes: ~35 s per Gauss-Newton
 //                             iteration and ~1.5 GB at 100k faces natively; volumes far more)
 //   PHEX_NATIVE_BIN, PHEX_PKG_DIR, PHEX_BENCH_OUT  other build dirs than build/native/bin, build/pkg,
@@ -35,7 +36,15 @@ for (const surface of surfaces.filter((s) => s.endsWith('.obj'))) {
   meshFiles[surface] = join(scratch, surface);
   spawnSync(cli, ['triangulate', '--surface', surface.slice(0, -4), '--method', 'lattice', '--faces', '60000', '--out', meshFiles[surface], '--quiet']);
 }
+// The global method from a 20k-triangle upload (the round bumps sampled by phex's lattice), as the issue of the
+// method measures it: 10k and 100k faces end to end, natively and in wasm.
+if (process.env.PHEX_BENCH_GLOBAL !== '0') {
+  meshFiles['bumps-20k.obj'] = join(scratch, 'bumps-20k.obj');
+  spawnSync(cli, ['triangulate', '--surface', 'freeform', '--method', 'lattice', '--faces', '10000', '--out', meshFiles['bumps-20k.obj'], '--quiet']);
+}
 const cases = [];
+if (process.env.PHEX_BENCH_GLOBAL !== '0')
+  for (const faces of sizes.filter((f) => f >= 10000)) cases.push({ surface: 'bumps-20k.obj', faces, solver: 'local', method: 'global' });
 for (const surface of surfaces)
   for (const faces of sizes)
     for (const solver of solvers)
@@ -65,7 +74,7 @@ function native(c, threads = 0) {
 function nativeOnce(c, threads) {
   const report = join(scratch, 'r.json');
   const input = isMesh(c) ? ['--mesh', meshFiles[c.surface]] : ['--surface', c.surface];
-  const args = ['run', ...input, '--faces', String(c.faces), '--solver', c.solver, '--duality', dualityOf(c),
+  const args = ['run', ...input, ...(c.method ? ['--method', c.method] : []), '--faces', String(c.faces), '--solver', c.solver, '--duality', dualityOf(c),
     '--threads', String(threads), '--report', report, '--quiet'];
   const started = performance.now();
   const p = spawnSync(cli, args, { encoding: 'utf8' });
@@ -87,7 +96,8 @@ function dualityOf(c) {
 }
 
 function wasm(c) {
-  const base = { ...(isMesh(c) ? { meshFile: meshFiles[c.surface], faces: c.faces, solver: c.solver } : c), duality: dualityOf(c) };
+  const base = { ...(isMesh(c) ? { meshFile: meshFiles[c.surface], faces: c.faces, solver: c.solver } : c), duality: dualityOf(c),
+    ...(c.method ? { method: c.method } : {}) };
   const params = { ...base, repeat: repeatOf(c), ...(c.faces > 10000 ? { warmupFaces: 10000 } : {}) };
   const p = spawnSync('node', ['--no-experimental-fetch', join(repo, 'bench/wasm-case.mjs'), JSON.stringify(params)],
     { encoding: 'utf8', maxBuffer: 1 << 26 });
@@ -105,12 +115,13 @@ for (const c of cases) {
   rows.push({ ...c, native: n, ...(one ? { native1: one } : {}), wasm: w });
   const sides = [[`native, ${n.threads ?? '?'} threads`, n], ...(one && n.threads !== 1 ? [['native, 1 thread', one]] : []), ['wasm', w]];
   for (const [where, r] of sides) {
-    if (r.error) { console.log(`| ${c.surface} | ${c.faces} | ${c.solver} | ${where} | error: ${r.error} |`); continue; }
+    const label = c.method ? `${c.surface} (${c.method})` : c.surface;
+    if (r.error) { console.log(`| ${label} | ${c.faces} | ${c.solver} | ${where} | error: ${r.error} |`); continue; }
     const ms = r.milliseconds;
     // wasm against native as users get it, and (in brackets) against native on one thread.
     const against = (m) => (m && !m.error ? fmt(ms.total / m.milliseconds.total, 2) : undefined);
     const ratio = where === 'wasm' ? [against(n), one && n.threads !== 1 ? `(${against(one)})` : ''].filter(Boolean).join(' ') : '';
-    console.log(`| ${c.surface} | ${r.faces} | ${c.solver} | ${where} | ${fmt(ms.triangulate)} | ${fmt(ms.dualize)} | ${fmt(ms.planarize)} | ${fmt(ms.measure)} | ${fmt(ms.total)} | ${r.iterations}${r.duality === 'tangent' ? ' (tangent)' : ''} | ${sci(r.planarityMax)} | ${r.invalidFaces} | ${sci(r.surfaceDistanceMax)} | ${fmt(r.peakMemoryMB)} | ${ratio} | ${where === 'wasm' ? fmt(r.firstTotal) : ''} |`);
+    console.log(`| ${label} | ${r.faces} | ${c.solver} | ${where} | ${fmt(ms.triangulate)} | ${fmt(ms.dualize)} | ${fmt(ms.planarize)} | ${fmt(ms.measure)} | ${fmt(ms.total)} | ${r.iterations}${r.duality === 'tangent' ? ' (tangent)' : ''} | ${sci(r.planarityMax)} | ${r.invalidFaces} | ${sci(r.surfaceDistanceMax)} | ${fmt(r.peakMemoryMB)} | ${ratio} | ${where === 'wasm' ? fmt(r.firstTotal) : ''} |`);
   }
 }
 // An app editing the parameters of one upload: the runs after the first reuse its surface (read, curvature

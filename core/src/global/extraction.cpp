@@ -29,6 +29,8 @@ constexpr double kCornerTurn = 1 - 0.76604444311897801;  // 1 - cos 40 degrees
 constexpr double kFarInRegion = 1.0;
 // An interior site whose region touches the boundary is dropped when nearer to it than this (cells).
 constexpr double kNearBoundary = 0.6;
+// An interior site nearer to a boundary edge of the triangulation than this share of the edge is dropped.
+constexpr double kNearBoundaryEdge = 0.35;
 constexpr int kMaxRounds = 12;
 
 struct DisjointSets {
@@ -71,7 +73,7 @@ class Extractor {
     }
     out.repairs = repairs;
     std::vector<int> bad;
-    out.mesh = dual(bad);
+    out.mesh = dual(bad, &out.seeds);
     if (!bad.empty()) {
       std::ostringstream s;
       s.precision(4);
@@ -79,6 +81,21 @@ class Extractor {
       s << "the lattice's Voronoi regions leave " << bad.size() << " vertices of the triangulation non-manifold, the first near ("
         << at.x() << ", " << at.y() << ", " << at.z() << "): a smaller cell resolves the surface there";
       throw Error(ErrorCode::CannotTile, s.str());
+    }
+    // Components of the surface no triangle stands on (smaller than a cell, or too thin for the lattice): named.
+    std::vector<char> laid(m_.components, 0);
+    for (int f = 0; f < out.mesh.F.rows(); ++f) laid[m_.component[out.seeds[out.mesh.F(f, 0)]]] = 1;
+    std::vector<double> area(m_.components, 0.0);
+    std::vector<Vec3> centre(m_.components, Vec3::Zero());
+    for (int v = 0; v < m_.vertexCount(); ++v) area[m_.component[v]] += m_.area[v], centre[m_.component[v]] += m_.area[v] * m_.point(v);
+    for (int c = 0; c < m_.components; ++c) {
+      if (laid[c]) continue;
+      std::ostringstream n;
+      n.precision(4);
+      const Vec3 at = area[c] > 0 ? Vec3(centre[c] / area[c]) : Vec3::Zero();
+      n << "a part of the surface (area " << area[c] << ") near (" << at.x() << ", " << at.y() << ", " << at.z()
+        << ") is too small for the cell " << cell_ << " and was left without panels: a smaller cell tiles it";
+      notes_.push_back(n.str());
     }
     notes_.insert(notes_.begin(), "global triangulation: " + std::to_string(out.mesh.V.rows()) + " vertices (" +
                                       std::to_string(boundarySiteCount()) + " on the boundary), " +
@@ -282,7 +299,8 @@ class Extractor {
   }
 
   // The triangles where three regions meet; `bad` gets the sites whose star is not a manifold fan (or disk).
-  TriMesh dual(std::vector<int>& bad) const {
+  // `siteOf` gets, per vertex of the result, its site.
+  TriMesh dual(std::vector<int>& bad, std::vector<int>* seeds = nullptr, std::vector<int>* siteOf = nullptr) const {
     const int ns = static_cast<int>(sites_.size());
     std::vector<std::array<int, 3>> tris;
     for (int f = 0; f < m_.F.rows(); ++f) {
@@ -333,8 +351,14 @@ class Extractor {
       for (int k = 0; k < 3; ++k)
         if (id[t[k]] < 0) id[t[k]] = count++;
     out.V.resize(count, 3);
+    if (seeds) seeds->assign(count, -1);
+    if (siteOf) siteOf->assign(count, -1);
     for (int s = 0; s < ns; ++s)
-      if (id[s] >= 0) out.V.row(id[s]) = sites_[s].p.transpose();
+      if (id[s] >= 0) {
+        if (siteOf) (*siteOf)[id[s]] = s;
+        out.V.row(id[s]) = sites_[s].p.transpose();
+        if (seeds) (*seeds)[id[s]] = sites_[s].seed;
+      }
     out.F.resize(static_cast<int>(tris.size()), 3);
     for (std::size_t f = 0; f < tris.size(); ++f)
       for (int k = 0; k < 3; ++k) out.F(static_cast<int>(f), k) = id[tris[f][k]];
@@ -382,9 +406,23 @@ class Extractor {
       if (size[s] > 0 && !remove[s] && dist_[farthest[s]] > kFarInRegion) addAt(farthest[s]);
     // Sites whose stars are not manifold: their regions are split.
     std::vector<int> bad;
-    dual(bad);
+    std::vector<int> seeds;
+    const TriMesh T = dual(bad, &seeds, &siteOf_);
     for (int s : bad)
       if (!remove[s] && dist_[farthest[s]] > 0.25) addAt(farthest[s]);
+    // An interior site next to a boundary edge, nearer to it than kNearBoundaryEdge of its length: its triangle is a
+    // sliver whose boundary panel no solve makes planar without folding (the rows there meet the boundary
+    // slantwise). It goes; its neighbours close over the gap.
+    for (int f = 0; f < T.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int a = siteOf_[T.F(f, k)], b = siteOf_[T.F(f, (k + 1) % 3)], c = siteOf_[T.F(f, (k + 2) % 3)];
+        if (sites_[a].loop < 0 || sites_[b].loop < 0 || sites_[c].loop >= 0 || remove[c]) continue;
+        const Vec3 A = sites_[a].p, B = sites_[b].p, C = sites_[c].p;
+        const double len = (B - A).norm();
+        if (!(len > 0)) continue;
+        const double s = std::clamp((C - A).dot(B - A) / (len * len), 0.0, 1.0);
+        if ((A + s * (B - A) - C).norm() < kNearBoundaryEdge * len) remove[c] = 1;
+      }
     int changes = static_cast<int>(added.size());
     std::vector<Site> kept;
     for (int s = 0; s < ns; ++s) {
@@ -420,7 +458,7 @@ class Extractor {
   std::vector<Site> sites_;
   std::vector<int> clusterOf_;
   std::vector<char> clusterHasBoundary_;
-  std::vector<int> label_;
+  std::vector<int> label_, siteOf_;
   std::vector<double> dist_;
   std::vector<std::string> notes_;
 };

@@ -2,7 +2,6 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
-#include <cstdlib>
 #include <numeric>
 #include <unordered_map>
 
@@ -17,12 +16,14 @@ namespace {
 
 // The field mesh stops being refined past this many triangles.
 constexpr std::size_t kMaxFieldTriangles = std::size_t(6) << 20;
+// An analytic surface's parameter lattice is laid at this many field-mesh edges and split as many times.
+constexpr double kCoarseSplit = 3.0;
 // Edges longer than this many field-mesh edges after the uniform split are bisected.
 constexpr double kLongEdge = 1.3;
 // The Dupin frame's aspect (sqrt of |k| ratio, regularized) from which the field is aligned, and fully.
 constexpr double kAlignFrom = 1.2, kAlignFull = 1.7;
 // The regularization of the aspect that decides the alignment, as a share of the metric's.
-static const double kAlignEps = getenv("PHEX_AE") ? atof(getenv("PHEX_AE")) : 0.05;
+constexpr double kAlignEps = 0.05;
 
 // Each triangle of `mesh` split k x k: the corners keep their ids, then come the edges' points, then the inner
 // points. `where` gets, per vertex, a triangle of `mesh` holding it and its barycentric coordinates there, and
@@ -277,22 +278,50 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, cons
     std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
     const double most = std::floor(std::sqrt(double(kMaxFieldTriangles) / std::max<double>(1.0, double(base.F.rows()))));
     const int k = static_cast<int>(std::clamp(std::ceil(lengths[lengths.size() / 2] / edge - 0.2), 1.0, std::max(1.0, most)));
-    std::vector<std::pair<int, Vec3>> where;
     std::vector<int> source;
-    const TriMesh split = global::split(base, k, where, source);
-    TriMesh fine = refine(base, split, std::move(source), kLongEdge * edge, kMaxFieldTriangles, where);
+    const TriMesh split = global::split(base, k, m.where, source);
+    TriMesh fine = refine(base, split, std::move(source), kLongEdge * edge, kMaxFieldTriangles, m.where);
     geo.resize(fine.V.rows());
     parallelRanges(static_cast<int>(fine.V.rows()), kPointsPerThread, [&](int begin, int end) {
       for (int v = begin; v < end; ++v)
-        geo[v] = v < base.V.rows() ? mesh->vertexGeometry(v) : mesh->geometryInTriangle(where[v].first, where[v].second);
+        geo[v] = v < base.V.rows() ? mesh->vertexGeometry(v) : mesh->geometryInTriangle(m.where[v].first, m.where[v].second);
     });
+    m.coarse = base;
     m.V = std::move(fine.V);
     m.F = std::move(fine.F);
   } else if (const auto* parametric = dynamic_cast<const ParametricSurface*>(&surface)) {
-    Triangulation t = latticeTriangulation(*parametric, edge);
-    geo = vertexGeometry(t, surface);
-    m.V = std::move(t.mesh.V);
-    m.F = std::move(t.mesh.F);
+    // The parameter lattice at kCoarseSplit edges, split k x k: its points in parameter space (periodic directions
+    // unwrapped about each triangle's first corner), so that their geometry is exact.
+    Triangulation t = latticeTriangulation(*parametric, kCoarseSplit * edge);
+    const ParametricSurface::Domain d = parametric->domain();
+    std::vector<int> source;
+    const TriMesh fine = global::split(t.mesh, static_cast<int>(kCoarseSplit), m.where, source);
+    geo.resize(fine.V.rows());
+    const int nc = static_cast<int>(t.mesh.V.rows());
+    parallelRanges(static_cast<int>(fine.V.rows()), kPointsPerThread, [&](int begin, int end) {
+      for (int v = begin; v < end; ++v) {
+        if (v < nc) {
+          geo[v] = parametric->geometryAt(t.uv[v].x(), t.uv[v].y());
+          continue;
+        }
+        const auto& [f, b] = m.where[v];
+        const Vec2 first = t.uv[t.mesh.F(f, 0)];
+        Vec2 uv = Vec2::Zero();
+        for (int c = 0; c < 3; ++c) {
+          Vec2 corner = t.uv[t.mesh.F(f, c)];
+          if (d.periodicU && std::abs(corner.x() - first.x()) > 0.5 * (d.u1 - d.u0))
+            corner.x() += corner.x() < first.x() ? d.u1 - d.u0 : d.u0 - d.u1;
+          if (d.periodicV && std::abs(corner.y() - first.y()) > 0.5 * (d.v1 - d.v0))
+            corner.y() += corner.y() < first.y() ? d.v1 - d.v0 : d.v0 - d.v1;
+          uv += b(c) * corner;
+        }
+        uv = parametric->normalize(uv);
+        geo[v] = parametric->geometryAt(uv.x(), uv.y());
+      }
+    });
+    m.coarse = t.mesh;
+    m.V = fine.V;
+    m.F = fine.F;
   } else {
     throw Error(ErrorCode::InvalidParameter, "the global method needs an uploaded mesh or an analytic surface");
   }

@@ -78,6 +78,11 @@ struct FieldMesh {
   std::vector<char> boundary;       // #V
   std::vector<Vec3> boundaryTangent;  // #V: unit tangent of the boundary at boundary vertices (zero elsewhere)
   std::vector<int> component;       // #V: connected component
+  // The coarser mesh the field mesh refines (an upload as it is, an analytic surface's parameter lattice): its
+  // vertices are the field mesh's first ones, and `where` gives each field-mesh vertex's triangle of it and its
+  // barycentric coordinates there. Smooth quantities (the cell's scale) are solved on it and interpolated.
+  TriMesh coarse;
+  std::vector<std::pair<int, Vec3>> where;
   int components = 0;
   double edgeMean = 0;
   int vertexCount() const { return static_cast<int>(V.rows()); }
@@ -130,12 +135,27 @@ std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vec
 // loops, connected as the dual of their Voronoi regions on the field mesh. Notes say what was done.
 struct Extraction {
   TriMesh mesh;
+  std::vector<int> seeds;  // #V: a field-mesh vertex next to each vertex (its field and cell there)
   std::vector<std::string> notes;
   int repairs = 0;  // sites added or removed until the regions' dual was a manifold of the surface's topology
 };
 Extraction extractTriangulation(const Surface& surface, const FieldMesh& mesh, const std::vector<Vec3>& q,
                                 const std::vector<Vec3>& o, const std::vector<double>& scale, double cell,
                                 const CancelFlag* cancel);
+
+// Fits the interior vertices of `T` (boundary vertices stay) to the field: every edge as near as it can be to the
+// lattice vector it stands for (the field's direction nearest to it, of the cell's length at its ends), in least
+// squares over the whole mesh, then back onto `surface`; `rounds` times (relax.cpp). The position field's
+// jitter goes, rows follow the field's lines, and where the lattice must bend (a singular point, a dislocation)
+// the bend spreads. Connectivity is unchanged.
+void fitToField(TriMesh& T, const std::vector<int>& seeds, const Surface& surface, const FieldMesh& mesh,
+                const std::vector<Vec3>& q, const std::vector<double>& scale, double cell, int rounds,
+                const CancelFlag* cancel);
+
+// Flips edges of `T` where that brings its vertices' valences nearer 6 (4 on the boundary) in sum of squares, and the
+// two new triangles stay on the surface's side and are no slivers (the lattice's local mix-ups: a vertex of valence
+// 8 ringed by 5s). Dislocations (a 5 next to a 7) only move. Returns how many were flipped.
+int improveValences(TriMesh& T, const Surface& surface, const CancelFlag* cancel);
 
 // Euler characteristic of a triangle mesh (V - E + F) and its number of boundary loops.
 struct Topology {

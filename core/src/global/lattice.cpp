@@ -2,7 +2,7 @@
 // same hierarchy as the directions.
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
+#include <limits>
 
 #include "global.hpp"
 #include "phex/parallel.hpp"
@@ -11,28 +11,33 @@ namespace phex::global {
 namespace {
 
 constexpr int kSweepGrain = 1024;
-int sweepsAt(int level, int levels) { static int f = getenv("PHEX_PS") ? atoi(getenv("PHEX_PS")) : 16; return level + 1 == levels ? 40 : level == 0 ? f : 12; }
+constexpr double kFlatHinge = 0.999;
+// Sweeps per level: many on the coarsest (cheap, where the lattice's layout settles), few on the middle ones, more on
+// the finest, whose points are extracted (16 there and 12 between cost twice the time for 0.2 points of valence 6).
+int sweepsAt(int level, int levels) { return level + 1 == levels ? 30 : level == 0 ? 10 : 5; }
 
-// The lattice of one vertex: origin o, edge vectors U and V = U turned by 60 degrees in the Dupin frame.
+// The lattice of one vertex: edge vectors U and V = U turned by 60 degrees in the Dupin frame, and the inverse of
+// their Gram matrix (for the coordinates of a point in that basis). Fixed while positions are smoothed.
 struct Lattice {
-  Vec3 o, U, V;
+  Vec3 U, V;
+  double i00 = 0, i01 = 0, i11 = 0;
 };
-Lattice latticeAt(const Level& L, const std::vector<Vec3>& Q, const std::vector<Vec3>& O, int v, double cell) {
+Lattice latticeAt(const Level& L, const std::vector<Vec3>& Q, int v, double cell) {
   const Frame& f = L.frame[v];
   const double h = cell * L.scale[v];
-  return {O[v], h * f.fromDupin(Q[v]), h * f.fromDupin(rotate60(Q[v], f.n))};
+  Lattice lat{h * f.fromDupin(Q[v]), h * f.fromDupin(rotate60(Q[v], f.n))};
+  const double uu = dot(lat.U, lat.U), uv = dot(lat.U, lat.V), vv = dot(lat.V, lat.V), det = uu * vv - uv * uv;
+  if (det > 0) lat.i00 = vv / det, lat.i01 = -uv / det, lat.i11 = uu / det;
+  return lat;
 }
 
-// The lattice point nearest to p (p's tangential part, in the lattice's Dupin metric: the lattice is equilateral
-// there). Coordinates (a, b) of p - o in the basis (U, V), then the best of the four corners around them by
-// a^2 + ab + b^2, the squared length of a U + b V in units of the edge.
-Vec3 nearestPoint(const Lattice& lat, const Vec3& p) {
-  const Vec3 d = p - lat.o;
-  const double uu = dot(lat.U, lat.U), uv = dot(lat.U, lat.V), vv = dot(lat.V, lat.V);
+// The point of the lattice through o nearest to p (p's tangential part, in the lattice's Dupin metric: the lattice
+// is equilateral there). Coordinates (a, b) of p - o in the basis (U, V), then the best of the four corners around
+// them by a^2 + ab + b^2, the squared length of a U + b V in units of the edge.
+Vec3 nearestPoint(const Lattice& lat, const Vec3& o, const Vec3& p) {
+  const Vec3 d = p - o;
   const double du = dot(lat.U, d), dv = dot(lat.V, d);
-  const double det = uu * vv - uv * uv;
-  if (!(det > 0)) return lat.o;
-  const double a = (vv * du - uv * dv) / det, b = (uu * dv - uv * du) / det;
+  const double a = lat.i00 * du + lat.i01 * dv, b = lat.i01 * du + lat.i11 * dv;
   const double a0 = std::floor(a), b0 = std::floor(b);
   double best = std::numeric_limits<double>::infinity(), ba = a0, bb = b0;
   for (int i = 0; i < 4; ++i) {
@@ -41,19 +46,16 @@ Vec3 nearestPoint(const Lattice& lat, const Vec3& p) {
     const double cost = ea * ea + ea * eb + eb * eb;
     if (cost < best) best = cost, ba = ca, bb = cb;
   }
-  return lat.o + ba * lat.U + bb * lat.V;
+  return o + ba * lat.U + bb * lat.V;
 }
 
 // The rotation taking unit normal a to unit normal b by the shortest way (about a x b), applied to v.
-Vec3 rotateInto(const Vec3& v, const Vec3& a, const Vec3& b) {
-  const double c = dot(a, b);
-  const Vec3 axis = cross(a, b);
-  if (c > 1 - 1e-12 || c < -0.5) return v;
+Vec3 rotateInto(const Vec3& v, const Vec3& axis, double c) {
   return v * c + cross(axis, v) + axis * (dot(axis, v) / (1 + c));
 }
 
 // The point nearest to both tangent planes' points p0, p1 (least squares to p0 and p1 on both planes): where the
-// two planes, hinged on their line of intersection, are compared.
+// two planes are hinged when compared.
 Vec3 middlePoint(const Vec3& p0, const Vec3& n0, const Vec3& p1, const Vec3& n1) {
   const double n0p0 = dot(n0, p0), n0p1 = dot(n0, p1), n1p0 = dot(n1, p0), n1p1 = dot(n1, p1), n0n1 = dot(n0, n1);
   const double denominator = 1 / (1 - n0n1 * n0n1 + 1e-4);
@@ -62,15 +64,23 @@ Vec3 middlePoint(const Vec3& p0, const Vec3& n0, const Vec3& p1, const Vec3& n1)
   return 0.5 * (p0 + p1) - 0.25 * (n0 * l0 + n1 * l1);
 }
 
-// Vertex u's lattice turned into the tangent plane of vertex v about the planes' hinge (the surface between them
-// unbent), so that lattice points near v compare as on the surface, not across its bend.
-Lattice hinged(const Lattice& lat, const Vec3& xu, const Vec3& nu, const Vec3& xv, const Vec3& nv) {
-  const Vec3 hinge = middlePoint(xv, nv, xu, nu);
-  return {hinge + rotateInto(lat.o - hinge, nu, nv), rotateInto(lat.U, nu, nv), rotateInto(lat.V, nu, nv)};
-}
-
 // `p` moved into the tangent plane at x with normal n.
 Vec3 intoPlane(const Vec3& p, const Vec3& x, const Vec3& n) { return p - dot(p - x, n) * n; }
+
+// The point of vertex u's lattice nearest to p (a point of vertex v's tangent plane), the two planes hinged on their
+// line of intersection (the surface between them unbent), so that lattice points compare as on the surface and not
+// across its bend; the result is in v's plane.
+Vec3 nearestHinged(const Lattice& lat, const Vec3& o, const Vec3& xu, const Vec3& nu, const Vec3& p, const Vec3& xv,
+                   const Vec3& nv) {
+  const double c = dot(nu, nv);
+  // Planes within 2.5 degrees compare well enough as they are (most neighbours on the fine levels).
+  if (c > kFlatHinge || c < -0.5) return intoPlane(nearestPoint(lat, o, p), xv, nv);
+  const Vec3 hinge = middlePoint(xv, nv, xu, nu);
+  const Vec3 axis = cross(nv, nu);  // v's plane onto u's, and back about -axis
+  const Vec3 inU = hinge + rotateInto(p - hinge, axis, c);
+  const Vec3 found = nearestPoint(lat, o, inU);
+  return intoPlane(hinge + rotateInto(found - hinge, Vec3(-axis), c), xv, nv);
+}
 
 // A boundary vertex's lattice point lies on the boundary's tangent line (a row of the lattice runs along the
 // boundary: its direction is fixed there), at the lattice step nearest the vertex.
@@ -91,13 +101,15 @@ std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vec
     checkCancel(cancel);
     const Level& L = levels[l];
     const std::vector<Vec3>& Q = fields[l];
+    std::vector<Lattice> lattice(L.size());
+    parallelRanges(L.size(), kSweepGrain, [&](int begin, int end) {
+      for (int v = begin; v < end; ++v) lattice[v] = latticeAt(L, Q, v, cell);
+    });
     O.assign(L.size(), Vec3::Zero());
     for (int v = 0; v < L.size(); ++v) {
       const Vec3 start = l == count - 1 ? L.x[v] : intoPlane(parentO[L.parent[v]], L.x[v], L.frame[v].n);
-      Lattice lat = latticeAt(L, Q, O, v, cell);
-      lat.o = start;
-      O[v] = intoPlane(nearestPoint(lat, L.x[v]), L.x[v], L.frame[v].n);
-      if (L.fixed[v]) O[v] = ontoBoundary(O[v], L.x[v], L.target[v], lat.U);
+      O[v] = intoPlane(nearestPoint(lattice[v], start, L.x[v]), L.x[v], L.frame[v].n);
+      if (L.fixed[v]) O[v] = ontoBoundary(O[v], L.x[v], L.target[v], lattice[v].U);
     }
     const int sweeps = sweepsAt(l, count);
     for (int s = 0; s < sweeps; ++s) {
@@ -112,15 +124,12 @@ std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vec
             double weight = 0;
             for (int i = L.start[v]; i < L.start[v + 1]; ++i) {
               const int u = L.adjacent[i];
-              const Lattice lu = hinged(latticeAt(L, Q, O, u, cell), L.x[u], L.frame[u].n, x, n);
-              const Vec3 p = intoPlane(nearestPoint(lu, sum), x, n);
+              const Vec3 p = nearestHinged(lattice[u], O[u], L.x[u], L.frame[u].n, sum, x, n);
               sum = (sum * weight + p) / (weight + 1);
               weight += 1;
             }
-            Lattice own = latticeAt(L, Q, O, v, cell);
-            own.o = sum;
-            Vec3 o = intoPlane(nearestPoint(own, x), x, n);
-            if (L.fixed[v]) o = ontoBoundary(o, x, L.target[v], own.U);
+            Vec3 o = intoPlane(nearestPoint(lattice[v], sum, x), x, n);
+            if (L.fixed[v]) o = ontoBoundary(o, x, L.target[v], lattice[v].U);
             O[v] = o;
           }
         });

@@ -2,9 +2,8 @@
 // curved surfaces it must), a lattice of one size cannot follow it without dislocations (pentagon-heptagon pairs,
 // a row more on one side than on the other); one whose size varies as e^phi with grad phi = -J omega can, omega
 // being the field's rotation against the metric's parallel transport.
+#include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
@@ -29,14 +28,24 @@ double exponential(double x) {
 }  // namespace
 
 std::vector<double> integrableScale(const FieldMesh& m, const std::vector<Vec3>& q, double strength) {
-  const int nv = m.vertexCount(), nf = static_cast<int>(m.F.rows());
-  std::vector<double> scale(nv, 1.0);
+  std::vector<double> scale(m.vertexCount(), 1.0);
   if (strength == 0) return scale;
+  // Solved on the coarse mesh the field mesh refines (phi is smooth), then interpolated.
+  const Triangles& F = m.coarse.F.rows() > 0 ? m.coarse.F : m.F;
+  const int nv = m.coarse.F.rows() > 0 ? static_cast<int>(m.coarse.V.rows()) : m.vertexCount();
+  const int nf = static_cast<int>(F.rows());
+  std::vector<std::vector<int>> adjacent(nv);
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) adjacent[F(f, c)].push_back(F(f, (c + 1) % 3)), adjacent[F(f, (c + 1) % 3)].push_back(F(f, c));
+  for (std::vector<int>& row : adjacent) {
+    std::sort(row.begin(), row.end());
+    row.erase(std::unique(row.begin(), row.end()), row.end());
+  }
   // Triangles at or next to a singular point carry its turn (+-60 degrees), which no smooth scale absorbs.
   std::vector<char> nearSingular(nv, 0);
   for (int f = 0; f < nf; ++f)
-    if (singularityIndex(m, q, m.F(f, 0), m.F(f, 1), m.F(f, 2)) != 0)
-      for (int c = 0; c < 3; ++c) nearSingular[m.F(f, c)] = 1;
+    if (singularityIndex(m, q, F(f, 0), F(f, 1), F(f, 2)) != 0)
+      for (int c = 0; c < 3; ++c) nearSingular[F(f, c)] = 1;
   // Per triangle, the lattice coordinates' increments along its edges (the lattice of unit cell at each corner, its
   // directions matched to corner 0's): c_e = (alpha_a + alpha_b)(x_b - x_a) / 2 with alpha the coframe dual to the
   // corner's lattice vectors. Integrable: sum_e e^-phi_e c_e = 0 around every triangle (phi_e the mean of its ends).
@@ -47,7 +56,7 @@ std::vector<double> integrableScale(const FieldMesh& m, const std::vector<Vec3>&
   std::vector<Tri> tris(nf);
   parallelRanges(nf, 4096, [&](int begin, int end) {
     for (int f = begin; f < end; ++f) {
-      const int c[3] = {m.F(f, 0), m.F(f, 1), m.F(f, 2)};
+      const int c[3] = {F(f, 0), F(f, 1), F(f, 2)};
       Tri& t = tris[f];
       if (nearSingular[c[0]] || nearSingular[c[1]] || nearSingular[c[2]]) continue;
       Vec3 U[3], V[3];
@@ -73,11 +82,6 @@ std::vector<double> integrableScale(const FieldMesh& m, const std::vector<Vec3>&
       t.use = t.c[0].allFinite() && t.c[1].allFinite() && t.c[2].allFinite();
     }
   });
-  if (getenv("PHEX_DBG")) {
-    double cs = 0, cc = 0; int n = 0;
-    for (const Tri& t : tris) if (t.use) { cs += (t.c[0] + t.c[1] + t.c[2]).norm(); cc += t.c[0].norm(); ++n; }
-    fprintf(stderr, "curl mean %.4g, |c| mean %.4g over %d triangles\n", cs / n, cc / n, n);
-  }
   // Gauss-Newton on phi: per triangle, sum_e w_e c_e (1 - (dphi_a + dphi_b) / 2) = 0 with w_e = e^-phi_e, plus a
   // light smoothness term (the graph Laplacian, weight kSmooth) that keeps phi defined where no triangle constrains it.
   double squares = 0;
@@ -88,12 +92,12 @@ std::vector<double> integrableScale(const FieldMesh& m, const std::vector<Vec3>&
   std::vector<double> phi(nv, 0.0), weight(nv, 1.0);
   for (int step = 0; step < 3; ++step) {
     std::vector<Eigen::Triplet<double>> entries;
-    entries.reserve(9 * static_cast<std::size_t>(nf) + 2 * m.adjacent.size() + nv);
+    entries.reserve(15 * static_cast<std::size_t>(nf) + nv);
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nv);
     for (int f = 0; f < nf; ++f) {
       const Tri& t = tris[f];
       if (!t.use) continue;
-      const int c[3] = {m.F(f, 0), m.F(f, 1), m.F(f, 2)};
+      const int c[3] = {F(f, 0), F(f, 1), F(f, 2)};
       // Row r (x and y) of J dphi = curl: the coefficient of dphi at corner k.
       double J[2][3] = {{0, 0, 0}, {0, 0, 0}};
       Vec2 curl = Vec2::Zero();
@@ -114,11 +118,11 @@ std::vector<double> integrableScale(const FieldMesh& m, const std::vector<Vec3>&
       }
     }
     for (int v = 0; v < nv; ++v) {
-      const int degree = m.start[v + 1] - m.start[v];
+      const int degree = static_cast<int>(adjacent[v].size());
       entries.emplace_back(v, v, kSmooth * (degree + 1e-3));
-      for (int i = m.start[v]; i < m.start[v + 1]; ++i) {
-        entries.emplace_back(v, m.adjacent[i], -kSmooth);
-        rhs(v) -= kSmooth * (phi[v] - phi[m.adjacent[i]]);
+      for (int u : adjacent[v]) {
+        entries.emplace_back(v, u, -kSmooth);
+        rhs(v) -= kSmooth * (phi[v] - phi[u]);
       }
     }
     Eigen::SparseMatrix<double> K(nv, nv);
@@ -132,20 +136,21 @@ std::vector<double> integrableScale(const FieldMesh& m, const std::vector<Vec3>&
       phi[v] = std::clamp(phi[v] + strength * delta(v), -0.6, 0.6);
       weight[v] = exponential(phi[v]);
     }
-    if (getenv("PHEX_DBG")) {
-      double lo = 0, hi = 0;
-      for (double x : phi) lo = std::min(lo, x), hi = std::max(hi, x);
-      fprintf(stderr, "step %d: phi %.3f .. %.3f, |delta| %.3g\n", step, lo, hi, delta.norm());
-    }
   }
-  // The mean cell area kept: sum A e^(-2 phi) = sum A.
+  // On the field mesh (interpolated from the coarse one where it refines it), the mean cell area kept:
+  // sum A e^(-2 phi) = sum A.
   double area = 0, weighted = 0;
-  for (int v = 0; v < nv; ++v) {
-    scale[v] = exponential(phi[v]);
+  for (int v = 0; v < m.vertexCount(); ++v) {
+    double p = v < nv ? phi[v] : 0.0;
+    if (v >= nv) {
+      const auto& [f, b] = m.where[v];
+      for (int c = 0; c < 3; ++c) p += b(c) * phi[F(f, c)];
+    }
+    scale[v] = exponential(p);
     area += m.area[v], weighted += m.area[v] / (scale[v] * scale[v]);
   }
   const double k = weighted > 0 ? std::sqrt(weighted / area) : 1.0;
-  for (double& s : scale) s *= k;
+  for (double& x : scale) x *= k;
   return scale;
 }
 

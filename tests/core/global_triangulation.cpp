@@ -1,0 +1,234 @@
+#include <catch.hpp>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <set>
+
+#include "implicit_surfaces.hpp"
+#include "phex/duality.hpp"
+#include "phex/error.hpp"
+#include "phex/global_triangulation.hpp"
+#include "phex/mesh_io.hpp"
+#include "phex/mesh_surface.hpp"
+#include "phex/parallel.hpp"
+#include "phex/pipeline.hpp"
+#include "phex/surfaces.hpp"
+
+using namespace phex;
+
+namespace {
+
+// Boundary edges (with one triangle) and edges with more than two, or used twice the same way.
+struct EdgeCount {
+  int boundary = 0, bad = 0;
+};
+EdgeCount countEdges(const TriMesh& mesh) {
+  std::map<std::pair<int, int>, int> directed;
+  for (int f = 0; f < mesh.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++directed[{mesh.F(f, k), mesh.F(f, (k + 1) % 3)}];
+  EdgeCount c;
+  for (const auto& [e, n] : directed) {
+    if (n > 1) ++c.bad;
+    if (!directed.count({e.second, e.first})) ++c.boundary;
+  }
+  return c;
+}
+
+GlobalOptions atFaces(int faces) {
+  GlobalOptions o;
+  o.faces = faces;
+  return o;
+}
+
+TriMesh readTestMesh(const std::string& file) { return readMesh(std::string(PHEX_TEST_DATA) + "/" + file); }
+
+MeshInput upload(const std::string& file) {
+  std::ifstream in(std::string(PHEX_TEST_DATA) + "/" + file, std::ios::binary);
+  MeshInput m;
+  m.bytes.assign(std::istreambuf_iterator<char>(in), {});
+  m.format = file.substr(file.rfind('.') + 1);
+  m.name = file;
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("global triangulation: closed surfaces of genus 0 to 3 keep their genus, and the P-Hex dual has sum(6 - n) = 12(1 - g)") {
+  for (int g = 0; g <= 3; ++g) {
+    CAPTURE(g);
+    const MeshSurface surface(test::closedSurfaceOfGenus(g, 32), "genus");
+    const Triangulation t = globalTriangulation(surface, atFaces(700));
+    const EdgeCount edges = countEdges(t.mesh);
+    CHECK(edges.boundary == 0);  // closed, as the input
+    CHECK(edges.bad == 0);       // a manifold
+    CHECK(test::eulerCharacteristic(t.mesh) == 2 - 2 * g);
+    // The field's singular points turn by 6 chi sixths in all (Poincare-Hopf).
+    int turns = 0;
+    for (const FieldSingularity& s : t.singularities) turns += s.index;
+    CHECK(turns == 12 * (1 - g));
+    // Every node of the dual joins three faces; its faces of n sides sum 6 - n to 12 (1 - g).
+    const DualMesh dual = dupinDual(t, surface);
+    std::vector<int> faces(dual.mesh.V.rows(), 0);
+    int sum = 0;
+    for (int f = 0; f < dual.mesh.faceCount(); ++f) {
+      sum += 6 - dual.mesh.faceSize(f);
+      for (int k = 0; k < dual.mesh.faceSize(f); ++k) ++faces[dual.mesh.face(f)[k]];
+    }
+    CHECK(sum == 12 * (1 - g));
+    CHECK(std::count(faces.begin(), faces.end(), 3) == static_cast<long>(faces.size()));
+  }
+}
+
+TEST_CASE("global triangulation: the shared free-form models keep their topology and come within 10 % of the faces asked") {
+  // PH-CPF's and Directional's example meshes (tests/data, their licences in its README).
+  const std::vector<std::pair<std::string, int>> models = {
+      {"phcpf_car_r.off", 0}, {"phcpf_3holes_r.off", 0}, {"phcpf_six_s0.off", 2},
+      {"phcpf_intersection.off", -1}, {"directional_botanic-garden-bubble.off", 1}, {"directional_Concerthall.off", 1}};
+  for (const auto& [file, loops] : models) {
+    CAPTURE(file);
+    const MeshSurface surface(readTestMesh(file), file);
+    const Triangulation t = globalTriangulation(surface, atFaces(1000));
+    CHECK(std::abs(double(t.mesh.V.rows()) / 1000 - 1) <= 0.1);
+    const EdgeCount edges = countEdges(t.mesh);
+    CHECK(edges.bad == 0);
+    CHECK((edges.boundary == 0) == surface.isClosed());
+    CHECK(test::eulerCharacteristic(t.mesh) == test::eulerCharacteristic(surface.mesh()));
+    // Boundary vertices lie on the input's boundary: within round-off of one of its edges.
+    const VertexRings rings = vertexRings(t.mesh);
+    const TriMesh& in = surface.mesh();
+    double worst = 0;
+    for (int v = 0; v < t.mesh.V.rows(); ++v) {
+      if (rings.closed[v]) continue;
+      const Vec3 p = t.mesh.V.row(v).transpose();
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const std::vector<int>& loop : surface.boundaryLoops())
+        for (std::size_t i = 0; i < loop.size(); ++i) {
+          const Vec3 a = in.V.row(loop[i]).transpose(), b = in.V.row(loop[(i + 1) % loop.size()]).transpose();
+          const double s = std::clamp((p - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+          nearest = std::min(nearest, (a + s * (b - a) - p).norm());
+        }
+      worst = std::max(worst, nearest);
+    }
+    CHECK(worst <= 1e-9 * surface.bounds().diagonal().norm());
+    if (loops >= 0) {
+      // As many boundary loops as the input (the intersection's creases are not boundaries).
+      int boundaryVertices = 0;
+      for (int v = 0; v < t.mesh.V.rows(); ++v) boundaryVertices += !rings.closed[v];
+      CHECK((boundaryVertices > 0) == (loops > 0));
+    }
+    // Most interior vertices of valence 6 (hexagons of the P-Hex mesh).
+    const TriangulationCheck check = checkTriangulation(t, surface);
+    CHECK(check.regularFraction >= 0.8);
+  }
+}
+
+TEST_CASE("global triangulation: planar to 1e-9 with every node of three faces and no face cut, where the surface allows") {
+  // Surfaces without parabolic curves, where the lattice's stars are valid (Props. 4, 5): the pipeline needs no cut.
+  for (const std::string name : {"catenoid", "hyperbolic-paraboloid"}) {
+    CAPTURE(name);
+    PipelineParams p;
+    p.surface = name;
+    p.method = TriangulationMethod::Global;
+    p.faces = 800;
+    const PipelineResult r = runPipeline(p);
+    CHECK(r.solve.converged);
+    CHECK(r.metrics.planarityMax <= 1e-9);
+    CHECK(r.interiorFacesSplit == 0);
+    CHECK(r.metrics.selfIntersectingCount == 0);
+    CHECK(std::abs(double(r.hex.faceCount()) / 800 - 1) <= 0.1);
+    // Nodes away from the boundary panels join three faces. (A boundary panel the solve leaves off planar is still
+    // cut in two: the hyperbolic paraboloid's sides, which its rows meet slantwise, have a few.)
+    std::vector<int> faces(r.hex.V.rows(), 0);
+    std::vector<char> onPanel(r.hex.V.rows(), 0);
+    for (int f = 0; f < r.hex.faceCount(); ++f)
+      for (int k = 0; k < r.hex.faceSize(f); ++k) ++faces[r.hex.face(f)[k]], onPanel[r.hex.face(f)[k]] |= r.dual.boundaryFace[f];
+    for (std::size_t v = 0; v < faces.size(); ++v)
+      if (!onPanel[v]) CHECK(faces[v] == 3);
+    CHECK(r.metrics.surfaceDistanceMax <= 0.002);
+  }
+  SECTION("a closed genus-0 upload: 12 pentagons' worth of singular points, closed P-Hex mesh") {
+    const TriMesh egg = test::closedSurfaceOfGenus(0, 32);
+    PipelineParams p;
+    p.method = TriangulationMethod::Global;
+    p.faces = 800;
+    MeshInput m;
+    const std::string obj = toObj(egg);
+    m.bytes.assign(obj.begin(), obj.end());
+    m.format = "obj";
+    m.name = "egg.obj";
+    p.mesh = m;
+    const PipelineResult r = runPipeline(p);
+    CHECK(r.solve.converged);
+    CHECK(r.interiorFacesSplit == 0);
+    int sum = 0;
+    for (int f = 0; f < r.hex.faceCount(); ++f) sum += 6 - r.hex.faceSize(f);
+    CHECK(sum == 12);
+    for (int f = 0; f < r.hex.faceCount(); ++f) CHECK(r.dual.boundaryFace[f] == 0);
+  }
+}
+
+TEST_CASE("global triangulation: the same mesh with one thread and with two") {
+  const ParametricSurfacePtr torus = makeSurface("torus");
+  setThreadCount(1);
+  const Triangulation one = globalTriangulation(*torus, atFaces(500));
+  setThreadCount(2);
+  const Triangulation two = globalTriangulation(*torus, atFaces(500));
+  setThreadCount(0);
+  REQUIRE(one.mesh.V.rows() == two.mesh.V.rows());
+  REQUIRE(one.mesh.F.rows() == two.mesh.F.rows());
+  CHECK(one.mesh.V == two.mesh.V);
+  CHECK(one.mesh.F == two.mesh.F);
+}
+
+TEST_CASE("global triangulation: options out of range, and a cell larger than the surface, are errors naming them") {
+  const ParametricSurfacePtr torus = makeSurface("torus");
+  auto fails = [&](GlobalOptions o, const std::string& word) {
+    try {
+      globalTriangulation(*torus, o);
+      FAIL("no error for " << word);
+    } catch (const Error& e) {
+      CHECK(std::string(e.what()).find(word) != std::string::npos);
+    }
+  };
+  GlobalOptions o = atFaces(500);
+  o.anisotropy = 0.5;
+  fails(o, "anisotropy");
+  o = atFaces(500);
+  o.alignment = -1;
+  fails(o, "alignment");
+  o = atFaces(500);
+  o.curvatureSizing = std::nan("");
+  fails(o, "curvatureSizing");
+  o = GlobalOptions();
+  fails(o, "cell");
+  o.cell = 100;  // the torus spans 2.8
+  fails(o, "larger than the surface");
+  // The pipeline names them too, and still runs after.
+  PipelineParams p;
+  p.method = TriangulationMethod::Global;
+  p.anisotropy = 9;
+  CHECK_THROWS_AS(runPipeline(p), Error);
+  p.anisotropy = 1.5;
+  p.faces = 300;
+  CHECK(runPipeline(p).hex.faceCount() > 0);
+}
+
+TEST_CASE("global triangulation: a part smaller than a cell is named in the notes, the rest tiled") {
+  // A torus and, far from it, a tiny sphere: the sphere gets no panel at this cell.
+  TriMesh big = test::closedSurfaceOfGenus(1, 28), small = test::closedSurfaceOfGenus(0, 8);
+  small.V *= 0.02;
+  small.V.rowwise() += Eigen::RowVector3d(5, 0, 0);
+  TriMesh both;
+  both.V.resize(big.V.rows() + small.V.rows(), 3);
+  both.V << big.V, small.V;
+  both.F.resize(big.F.rows() + small.F.rows(), 3);
+  both.F << big.F, (small.F.array() + int(big.V.rows())).matrix();
+  const MeshSurface surface(both, "two parts");
+  const Triangulation t = globalTriangulation(surface, atFaces(400));
+  bool named = false;
+  for (const std::string& n : t.notes) named = named || n.find("too small for the cell") != std::string::npos;
+  CHECK(named);
+  CHECK(countEdges(t.mesh).boundary == 0);
+  CHECK(test::eulerCharacteristic(t.mesh) == 0);
+}
