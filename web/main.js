@@ -12,7 +12,24 @@ const RERUN_DELAY_MS = 150;
 const DEFAULT_SURFACE = 'torus';
 // Run parameters with a form field of the same id; those with `requires` show only when the core supports them.
 const FORM_PARAMS = PARAMETERS.filter((p) => $(p.name));
+const PARAMETER_SPEC = Object.fromEntries(PARAMETERS.map((p) => [p.name, p]));
 const VIEW_KEYS = ['view', 'color'];
+// Singular-point markers' radius over the triangulation's mean edge: large enough to find, small enough that a
+// pentagon-heptagon pair shows as two.
+const MARKER_RADIUS = 0.25;
+// What each triangulation method does, under the method selector.
+const METHOD_TEXT = {
+  auto: "The surface's recommended method (see its description); for an upload, pre-specified conjugation, or §7's route for a closed convex one.",
+  progressive: 'Method 1 (§5.2): each row of triangles laid from the last by progressive conjugation.',
+  prespecified: 'Method 2 (§5.2): rows of triangles along a pre-specified direction field (below).',
+  subdivision: '§7: Loop subdivision of a convex control mesh; a closed convex surface gets 12 pentagons.',
+  lattice: 'Rows of the parameter domain, every other one shifted (analytic surfaces).',
+  global: 'Tiles any surface, uploaded or analytic, of any genus and boundary, along a 6-fold direction field in the Dupin metric: the field places pentagons and heptagons at its singular points (markers in the triangulation view), and every node joins three faces.',
+};
+// Parameters that apply to one method only: their fields show, and are sent, only when it is chosen.
+const METHOD_PARAMS = { global: ['anisotropy', 'alignment', 'curvatureSizing'] };
+// Parameters the global method does not read (its field is its own): hidden while it is chosen.
+const NOT_GLOBAL = ['field', 'lowerBound'];
 
 const viewer = new Viewer($('viewport'));
 const ms = (x) => Math.round(x).toString();
@@ -68,6 +85,21 @@ function supported(spec) {
   return Array.isArray(c) ? c.length > 0 : Boolean(c);
 }
 
+/** Whether a parameter applies to the chosen method (see METHOD_PARAMS, NOT_GLOBAL). */
+function applies(name) {
+  const method = $('method').value;
+  const only = Object.entries(METHOD_PARAMS).find(([, names]) => names.includes(name));
+  if (only) return only[0] === method;
+  return !(method === 'global' && NOT_GLOBAL.includes(name));
+}
+
+/** Shows the chosen method's description and the fields of the parameters that apply to it. */
+function showMethodOptions() {
+  $('method-description').textContent = METHOD_TEXT[$('method').value] ?? '';
+  $('global-params').hidden = !applies('anisotropy');
+  for (const name of NOT_GLOBAL) $(name).closest('label').hidden = !supported(PARAMETER_SPEC[name]) || !applies(name);
+}
+
 /** Tooltip text and HTML range of a parameter, from its description and range. */
 function describeInput(input, { description, min, max, default: value, values }) {
   const range = values ? `one of ${values.join(', ')}` : `${min} … ${max === Infinity ? '∞' : max}`;
@@ -86,6 +118,8 @@ function buildForm() {
     if (!input) continue;
     describeInput(input, spec);
     input.closest('label').hidden = !supported(spec);
+    // The global method's fields say their range in the label, as they have no other hint.
+    if (input.closest('#global-params')) input.closest('label').firstChild.textContent += ` (${spec.min} – ${spec.max})`;
   }
   $('method').replaceChildren(...capabilities.methods.map((m) => new Option(m, m, m === 'auto', m === 'auto')));
   $('field-values').replaceChildren(...capabilities.fields.map((f) => new Option(f.replace('angle:DEG', 'angle:30'))));
@@ -137,7 +171,7 @@ function readParams() {
     for (const input of $('surface-params').querySelectorAll('input')) params.surfaceParams[input.dataset.param] = numberOf(input);
   }
   for (const spec of FORM_PARAMS) {
-    if (!supported(spec)) continue;
+    if (!supported(spec) || !applies(spec.name)) continue;
     const input = $(spec.name);
     params[spec.name] = spec.type === 'integer' || spec.type === 'number' ? numberOf(input) : spec.type === 'point' ? pointOf(input) : input.value.trim();
   }
@@ -157,6 +191,7 @@ function writeForm(params) {
     const value = params[spec.name] ?? spec.default;
     $(spec.name).value = spec.type === 'point' ? (value ?? []).join(', ') : String(value);
   }
+  showMethodOptions();
 }
 
 // ---------------------------------------------------------------- the design in the URL
@@ -231,7 +266,8 @@ async function draw({ refit = false } = {}) {
     viewer.showPolygons(last.result[view], faceColor, shading());
     showLegend(legend);
   } else if (view === 'triangulation') {
-    viewer.showTriangles(last.result.triangulation, null, shading());
+    const { triangulation } = last.result;
+    viewer.showTriangles(triangulation, null, { ...shading(), markerRadius: MARKER_RADIUS * (triangulation.check?.edgeMean ?? 0) });
     showLegend(null);
   } else if (view === 'structure') {
     showLegend(null);
@@ -339,8 +375,28 @@ function showSpread(id, min, mean, max) {
   $(id).title = ok ? `mean ${mean.toPrecision(3)}` : '';
 }
 
+/** The field's singular points by index ("14 · +1: 13 · −1: 1 · sum 12"), coloured as their markers; – for none. */
+function showSingularities(singularities) {
+  const dd = $('singular-points');
+  if (!singularities?.index.length) {
+    dd.textContent = singularities ? '0' : '–';
+    return;
+  }
+  const byIndex = new Map();
+  let sum = 0;
+  for (const i of singularities.index) (byIndex.set(i, (byIndex.get(i) ?? 0) + 1), (sum += i));
+  const parts = [...byIndex].sort(([a], [b]) => b - a).map(([i, count]) => {
+    const span = document.createElement('span');
+    span.className = i > 0 ? 'pentagon' : 'heptagon';
+    span.textContent = `${i > 0 ? '+' : '−'}${Math.abs(i)}: ${count}`;
+    return span;
+  });
+  dd.replaceChildren(String(singularities.index.length), ...parts.flatMap((span) => [' · ', span]), ` · sum ${sum}`);
+}
+
 function showStats({ metrics, solve, timings, method, field, triangulation, duality }) {
   showNotes(triangulation?.notes ?? []);
+  showSingularities(method === 'global' ? triangulation.singularities : null);
   const invalidStars = triangulation?.check?.invalidStars?.length;
   $('triangulation-info').textContent = [method, field, invalidStars === undefined ? null : `${invalidStars} invalid stars`]
     .filter(Boolean)
@@ -677,6 +733,7 @@ async function start() {
     phex.clearUploadCache().catch(() => {});
     compute();
   });
+  $('method').addEventListener('input', showMethodOptions);  // before the form's listener reads the parameters
   $('cancel').addEventListener('click', () => running?.abort());
   $('view').addEventListener('change', () => {
     $('structure-params').hidden = $('view').value !== 'structure';
