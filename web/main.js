@@ -2,7 +2,7 @@
 import * as THREE from 'three';
 import { createPHex, MESH_FORMATS, meshToOBJ, meshToPLY, PARAMETERS, STRUCTURE_OPTIONS, triangulateFaces } from 'phex';
 import { CURVATURE_MODES, curvatureColoring, FACE_MODES, faceColoring, faceQuantities, fmt } from './coloring.js';
-import { PRESETS } from './presets.js';
+import { MODELS, PRESETS } from './presets.js';
 import { structureGroup, Viewer } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
@@ -134,7 +134,8 @@ function buildForm() {
     button.type = 'button';
     button.textContent = label;
     button.dataset.preset = label;
-    button.title = 'Compute this design';
+    const { model } = PRESETS[label];
+    button.title = model ? `Compute this design on the model ${MODELS[model].credit}` : 'Compute this design';
     button.addEventListener('click', () => applyPreset(label));
     figures.append(button);
   }
@@ -199,7 +200,8 @@ function writeForm(params) {
 /** The design as a URL hash: only what differs from the defaults. */
 function designToHash(params) {
   const q = new URLSearchParams();
-  if (params.surface) q.set('surface', params.surface);
+  if (upload?.model) q.set('model', upload.model);
+  else if (params.surface) q.set('surface', params.surface);
   const spec = surfaces.find((s) => s.name === params.surface);
   for (const [k, v] of Object.entries(params.surfaceParams ?? {})) {
     if (spec?.parameters.find((p) => p.name === k)?.default !== v) q.set(`s.${k}`, String(v));
@@ -208,6 +210,11 @@ function designToHash(params) {
   if ($('view').value !== 'hex') q.set('view', $('view').value);
   if ($('color').value !== 'planarity') q.set('color', $('color').value);
   return `#${q}`;
+}
+
+/** The hash to keep in the URL for the shown design: an upload of the user's own is not in a link, so it keeps the last one. */
+function designLink(params) {
+  return upload && !upload.model ? location.hash : designToHash(params);
 }
 
 /** The design of a link (hash, or query as a fallback), or null when it has none. */
@@ -219,7 +226,7 @@ function designFromUrl() {
   const view = {};
   for (const [key, value] of q) {
     const spec = PARAMETERS.find((p) => p.name === key);
-    if (key === 'surface') params.surface = value;
+    if (key === 'surface' || key === 'model') params[key] = value;
     else if (key.startsWith('s.')) params.surfaceParams[key.slice(2)] = Number(value);
     else if (spec) params[key] = spec.type === 'integer' || spec.type === 'number' ? Number(value) : spec.type === 'point' ? value.split(',').map(Number) : value;
     else if (VIEW_KEYS.includes(key)) view[key] = value;
@@ -459,7 +466,7 @@ async function compute() {
     showStats(result);
     for (const button of document.querySelectorAll('.exports button')) button.disabled = false;
     $('stage').textContent = `done in ${ms(result.timings.total)} ms`;
-    if (!upload) history.replaceState(null, '', designToHash(params));
+    history.replaceState(null, '', designLink(params));
     markShown(first);
     setState('ready');
     return 'ok';
@@ -503,8 +510,11 @@ function scheduleRun() {
   rerunTimer = setTimeout(compute, RERUN_DELAY_MS);
 }
 
-function applyPreset(label) {
-  setUpload(null);
+async function applyPreset(label) {
+  const { model } = PRESETS[label];
+  const loaded = model ? await modelUpload(model) : null;
+  if (model && !loaded) return;
+  setUpload(loaded);
   writeForm(structuredClone(PRESETS[label].params));
   if (PRESETS[label].view?.color) $('color').value = PRESETS[label].view.color;
   lastSurfaceKey = null; // frame the new design
@@ -513,10 +523,31 @@ function applyPreset(label) {
 
 // ---------------------------------------------------------------- uploads
 
+/** Sets the form to a link's design, with its bundled model as the upload where it names one. */
+async function openDesign({ params }) {
+  setUpload(params.model ? await modelUpload(params.model) : null);
+  writeForm(params);
+}
+
+/** A model bundled with the app (MODELS) as an upload, fetched; null, with the reason shown, when it cannot be. */
+async function modelUpload(name) {
+  try {
+    if (!MODELS[name]) throw new Error('no such model in this app');
+    const response = await fetch(MODELS[name].url);
+    if (!response.ok) throw new Error(`${response.status} ${response.statusText}`);
+    return { bytes: new Uint8Array(await response.arrayBuffer()), name, format: name.split('.').pop(), model: name };
+  } catch (error) {
+    showError(`Could not load the model ${name}: ${error.message}`);
+    return null;
+  }
+}
+
 function setUpload(value) {
   upload = value;
   $('mesh-source').hidden = !upload;
-  $('mesh-name').textContent = upload ? `Mesh: ${upload.name} (${(upload.bytes.length / 1024).toFixed(0)} kB)` : '';
+  // A bundled model names its source and licence (CC BY-SA asks for the credit where it is used).
+  const credit = upload?.model ? ` — ${MODELS[upload.model].credit}` : '';
+  $('mesh-name').textContent = upload ? `Mesh: ${upload.name} (${(upload.bytes.length / 1024).toFixed(0)} kB)${credit}` : '';
   $('surface').disabled = Boolean(upload);
   $('surface-params').disabled = Boolean(upload);
   // The analytic surface's description and parameters do not apply to an upload: hidden while one is loaded.
@@ -699,7 +730,7 @@ async function start() {
   document.body.dataset.meshInput = String(capabilities.meshInput);
   buildForm();
   const linked = designFromUrl();
-  writeForm(linked?.params ?? { surface: DEFAULT_SURFACE });
+  await openDesign(linked ?? { params: { surface: DEFAULT_SURFACE } });
   if (linked?.params.surface && !knownSurface(linked.params.surface)) {
     showError(`The link names an unknown surface "${linked.params.surface}"; showing the ${DEFAULT_SURFACE}.`);
   }
@@ -737,14 +768,14 @@ async function start() {
   $('cancel').addEventListener('click', () => running?.abort());
   $('view').addEventListener('change', () => {
     $('structure-params').hidden = $('view').value !== 'structure';
-    draw().then(() => last && history.replaceState(null, '', upload ? location.hash : designToHash(last.params)));
+    draw().then(() => last && history.replaceState(null, '', designLink(last.params)));
   });
   let structureTimer = 0;
   $('structure-params').addEventListener('input', () => {
     clearTimeout(structureTimer);
     structureTimer = setTimeout(() => draw(), RERUN_DELAY_MS);
   });
-  $('color').addEventListener('change', () => draw().then(() => last && history.replaceState(null, '', upload ? location.hash : designToHash(last.params))));
+  $('color').addEventListener('change', () => draw().then(() => last && history.replaceState(null, '', designLink(last.params))));
   $('wireframe').addEventListener('change', () => viewer.setShading(shading()));
   $('flat').addEventListener('change', () => draw());
   $('fit').addEventListener('click', () => viewer.fitToView());
@@ -767,9 +798,7 @@ async function start() {
   addEventListener('hashchange', () => {
     const design = designFromUrl();
     if (!design || location.hash === designToHash(readParams())) return;
-    setUpload(null);
-    writeForm(design.params);
-    compute();
+    openDesign(design).then(compute);
   });
   addEventListener('error', (event) => showError(String(event.message)));
   addEventListener('unhandledrejection', (event) => showError(String(event.reason?.message ?? event.reason)));

@@ -479,6 +479,41 @@ test('method global on a closed upload: the triangulation view marks the singula
   assert.deepEqual(pageErrors, []);
 });
 
+test('the genus-3 preset loads its bundled model, tiles it with the global method and marks its heptagons', async () => {
+  await afterRun(() => page.click('button[data-preset^="Genus 3"]'));
+  assert.equal(await page.getAttribute('body', 'data-state'), 'ready', await page.textContent('#error'));
+  assert.match(await page.textContent('#mesh-name'), /phcpf_3holes_r\.off/);
+  assert.equal(await page.inputValue('#method'), 'global');
+  assert.match(page.url(), /model=phcpf_3holes_r\.off/);
+  // Genus 3: the indices add up to 12 (1 - 3) = -24, so heptagons (-1) there must be.
+  const singular = await page.textContent('#singular-points');
+  assert.match(singular, /−1: \d+.* · sum -24$/, singular);
+  const hex = await page.locator('#viewport').screenshot();
+  const { count, total } = await nonBackgroundPixels(hex);
+  assert.ok(count > total * 0.05, `only ${count} of ${total} viewport pixels show the mesh`);
+  await page.screenshot({ path: join(artifacts, 'global-genus3.png') });
+  await page.selectOption('#view', 'triangulation');
+  const blue = await pixelsOf(await page.locator('#viewport').screenshot(), HEPTAGON_RGB);
+  await page.screenshot({ path: join(artifacts, 'global-genus3-field.png') });
+  assert.ok(blue > 50, `${blue} pixels of the heptagons' markers`);
+  await page.selectOption('#view', 'hex');
+
+  // Its link opens the model again.
+  const other = await context.newPage();
+  try {
+    await other.goto(page.url());
+    await other.waitForSelector('body[data-state=ready]', { timeout: RUN_TIMEOUT_MS });
+    assert.match(await other.textContent('#mesh-name'), /phcpf_3holes_r\.off/);
+    assert.equal(await other.textContent('#face-count'), await page.textContent('#face-count'));
+  } finally {
+    await other.close();
+  }
+  await afterRun(() => page.click('#mesh-clear'));
+  assert.doesNotMatch(page.url(), /model=/);
+  await afterRun(() => page.selectOption('#method', 'auto'));
+  assert.deepEqual(pageErrors, []);
+});
+
 test('a link with parameters restores the design', async () => {
   const other = await context.newPage();
   try {
