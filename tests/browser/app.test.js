@@ -49,24 +49,32 @@ after(async () => {
   if (profile) rmSync(profile, { recursive: true, force: true });
 });
 
-/** Counts pixels of a PNG screenshot that differ clearly from the background colour, decoded in the page. */
-async function nonBackgroundPixels(png, on = page, background = BACKGROUND) {
+/**
+ * Counts pixels of a PNG screenshot, decoded in the page, within `tolerance` of the colour `rgb` (the sum of the
+ * channels' differences), of `total`.
+ */
+async function pixelsNear(png, rgb, tolerance, on = page) {
   return on.evaluate(
-    async ({ data, background }) => {
+    async ({ data, rgb, tolerance }) => {
       const bitmap = await createImageBitmap(new Blob([Uint8Array.from(atob(data), (c) => c.charCodeAt(0))]));
       const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
       const ctx = canvas.getContext('2d');
       ctx.drawImage(bitmap, 0, 0);
       const { data: pixels } = ctx.getImageData(0, 0, bitmap.width, bitmap.height);
-      let count = 0;
+      let near = 0;
       for (let i = 0; i < pixels.length; i += 4) {
-        const d = Math.abs(pixels[i] - background[0]) + Math.abs(pixels[i + 1] - background[1]) + Math.abs(pixels[i + 2] - background[2]);
-        if (d > 24) count++;
+        if (Math.abs(pixels[i] - rgb[0]) + Math.abs(pixels[i + 1] - rgb[1]) + Math.abs(pixels[i + 2] - rgb[2]) <= tolerance) near++;
       }
-      return { count, total: pixels.length / 4 };
+      return { near, total: pixels.length / 4 };
     },
-    { data: png.toString('base64'), background },
+    { data: png.toString('base64'), rgb, tolerance },
   );
+}
+
+/** Counts pixels of a PNG screenshot that differ clearly from the background colour. */
+async function nonBackgroundPixels(png, on = page, background = BACKGROUND) {
+  const { near, total } = await pixelsNear(png, background, 24, on);
+  return { count: total - near, total };
 }
 
 test('the default torus is computed and drawn on load', async () => {
@@ -130,23 +138,9 @@ test('export OBJ downloads the mesh', async () => {
 });
 
 
-/** Counts pixels of a PNG screenshot within `tolerance` (sum of channel differences) of the colour `rgb`. */
+/** Counts pixels of a PNG screenshot near the colour `rgb` (see pixelsNear). */
 async function pixelsOf(png, rgb, tolerance = 60) {
-  return page.evaluate(
-    async ({ data, rgb, tolerance }) => {
-      const bitmap = await createImageBitmap(new Blob([Uint8Array.from(atob(data), (c) => c.charCodeAt(0))]));
-      const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
-      const ctx = canvas.getContext('2d');
-      ctx.drawImage(bitmap, 0, 0);
-      const { data: pixels } = ctx.getImageData(0, 0, bitmap.width, bitmap.height);
-      let count = 0;
-      for (let i = 0; i < pixels.length; i += 4) {
-        if (Math.abs(pixels[i] - rgb[0]) + Math.abs(pixels[i + 1] - rgb[1]) + Math.abs(pixels[i + 2] - rgb[2]) <= tolerance) count++;
-      }
-      return count;
-    },
-    { data: png.toString('base64'), rgb, tolerance },
-  );
+  return (await pixelsNear(png, rgb, tolerance)).near;
 }
 // The singular points' markers (web/viewer.js PENTAGON_COLOR, HEPTAGON_COLOR), drawn unlit.
 const PENTAGON_RGB = [0xe0, 0x20, 0x1c];
