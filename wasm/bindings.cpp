@@ -119,6 +119,9 @@ phex::PipelineParams paramsFromJs(const val& o) {
   if (has(o, "folds")) p.preventFolds = switchValue(o, "folds", "prevent", "allow");
   if (has(o, "surfaceFit")) p.fitSurface = switchValue(o, "surfaceFit", "on", "off");
   if (has(o, "splitBoundary")) p.splitBoundaryPanels = switchValue(o, "splitBoundary", "on", "off");
+  if (has(o, "anisotropy")) p.anisotropy = number(o, "anisotropy");
+  if (has(o, "alignment")) p.alignment = number(o, "alignment");
+  if (has(o, "curvatureSizing")) p.curvatureSizing = number(o, "curvatureSizing");
   return p;
 }
 
@@ -143,6 +146,18 @@ val resultToJs(const phex::PipelineResult& r) {
   lines.set("positions", copyArray("Float64Array", linePoints.data(), linePoints.size()));
   lines.set("offsets", copyArray("Uint32Array", lineOffsets.data(), lineOffsets.size()));
   tri.set("fieldLines", lines);
+  // The global method's singular points: positions (x, y, z each) and their indices in sixths of a turn.
+  const std::vector<phex::FieldSingularity>& singular = r.triangulation.singularities;
+  std::vector<double> singularAt;
+  std::vector<std::int32_t> singularIndex;
+  for (const phex::FieldSingularity& s : singular) {
+    singularAt.insert(singularAt.end(), {s.position.x(), s.position.y(), s.position.z()});
+    singularIndex.push_back(s.index);
+  }
+  val singularities = val::object();
+  singularities.set("positions", copyArray("Float64Array", singularAt.data(), singularAt.size()));
+  singularities.set("index", copyArray("Int32Array", singularIndex.data(), singularIndex.size()));
+  tri.set("singularities", singularities);
   val notes = val::array();
   for (const std::string& n : r.triangulation.notes) notes.call<void>("push", n);
   tri.set("notes", notes);
@@ -308,12 +323,13 @@ val capabilities() {
   for (const char* f : {"obj", "off", "ply", "stl"}) formats.call<void>("push", std::string(f));
   c.set("meshFormats", formats);
   val methods = val::array();
-  for (const char* m : {"auto", "progressive", "prespecified", "subdivision", "lattice"}) methods.call<void>("push", std::string(m));
+  for (const char* m : {"auto", "progressive", "prespecified", "subdivision", "lattice", "global"}) methods.call<void>("push", std::string(m));
   c.set("methods", methods);
   val fields = val::array();
   for (const char* f : {"principal", "angle:DEG", "param", "radial", "diverging", "spiral", "section"}) fields.call<void>("push", std::string(f));
   c.set("fields", fields);
   c.set("lowerBound", true);
+  c.set("globalOptions", true);  // anisotropy, alignment, curvatureSizing
   val controls = val::array();
   for (const std::string& n : phex::subdivisionControls()) controls.call<void>("push", n);
   c.set("subdivisionControls", controls);

@@ -2,7 +2,7 @@
 import * as THREE from 'three';
 import { createPHex, MESH_FORMATS, meshToOBJ, meshToPLY, PARAMETERS, STRUCTURE_OPTIONS, triangulateFaces } from 'phex';
 import { CURVATURE_MODES, curvatureColoring, FACE_MODES, faceColoring, faceQuantities, fmt } from './coloring.js';
-import { PRESETS } from './presets.js';
+import { MODELS, PRESETS } from './presets.js';
 import { structureGroup, Viewer } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
@@ -12,7 +12,24 @@ const RERUN_DELAY_MS = 150;
 const DEFAULT_SURFACE = 'torus';
 // Run parameters with a form field of the same id; those with `requires` show only when the core supports them.
 const FORM_PARAMS = PARAMETERS.filter((p) => $(p.name));
+const PARAMETER_SPEC = Object.fromEntries(PARAMETERS.map((p) => [p.name, p]));
 const VIEW_KEYS = ['view', 'color'];
+// Singular-point markers' radius over the triangulation's mean edge: large enough to find, small enough that a
+// pentagon-heptagon pair shows as two.
+const MARKER_RADIUS = 0.25;
+// What each triangulation method does, under the method selector.
+const METHOD_TEXT = {
+  auto: "The surface's recommended method (see its description); for an upload, pre-specified conjugation, or §7's route for a closed convex one.",
+  progressive: 'Method 1 (§5.2): each row of triangles laid from the last by progressive conjugation.',
+  prespecified: 'Method 2 (§5.2): rows of triangles along a pre-specified direction field (below).',
+  subdivision: '§7: Loop subdivision of a convex control mesh; a closed convex surface gets 12 pentagons.',
+  lattice: 'Rows of the parameter domain, every other one shifted (analytic surfaces).',
+  global: 'Tiles any surface, uploaded or analytic, of any genus and boundary, along a 6-fold direction field in the Dupin metric: the field places pentagons and heptagons at its singular points (markers in the triangulation view), and every node joins three faces.',
+};
+// Parameters that apply to one method only: their fields show, and are sent, only when it is chosen.
+const METHOD_PARAMS = { global: ['anisotropy', 'alignment', 'curvatureSizing'] };
+// Parameters the global method does not read (its field is its own): hidden while it is chosen.
+const NOT_GLOBAL = ['field', 'lowerBound'];
 
 const viewer = new Viewer($('viewport'));
 const ms = (x) => Math.round(x).toString();
@@ -68,6 +85,21 @@ function supported(spec) {
   return Array.isArray(c) ? c.length > 0 : Boolean(c);
 }
 
+/** Whether a parameter applies to the chosen method (see METHOD_PARAMS, NOT_GLOBAL). */
+function applies(name) {
+  const method = $('method').value;
+  const only = Object.entries(METHOD_PARAMS).find(([, names]) => names.includes(name));
+  if (only) return only[0] === method;
+  return !(method === 'global' && NOT_GLOBAL.includes(name));
+}
+
+/** Shows the chosen method's description and the fields of the parameters that apply to it. */
+function showMethodOptions() {
+  $('method-description').textContent = METHOD_TEXT[$('method').value] ?? '';
+  $('global-params').hidden = !applies('anisotropy');
+  for (const name of NOT_GLOBAL) $(name).closest('label').hidden = !supported(PARAMETER_SPEC[name]) || !applies(name);
+}
+
 /** Tooltip text and HTML range of a parameter, from its description and range. */
 function describeInput(input, { description, min, max, default: value, values }) {
   const range = values ? `one of ${values.join(', ')}` : `${min} … ${max === Infinity ? '∞' : max}`;
@@ -86,6 +118,8 @@ function buildForm() {
     if (!input) continue;
     describeInput(input, spec);
     input.closest('label').hidden = !supported(spec);
+    // The global method's fields say their range in the label, as they have no other hint.
+    if (input.closest('#global-params')) input.closest('label').firstChild.textContent += ` (${spec.min} – ${spec.max})`;
   }
   $('method').replaceChildren(...capabilities.methods.map((m) => new Option(m, m, m === 'auto', m === 'auto')));
   $('field-values').replaceChildren(...capabilities.fields.map((f) => new Option(f.replace('angle:DEG', 'angle:30'))));
@@ -100,7 +134,8 @@ function buildForm() {
     button.type = 'button';
     button.textContent = label;
     button.dataset.preset = label;
-    button.title = 'Compute this design';
+    const { model } = PRESETS[label];
+    button.title = model ? `Compute this design on the model ${MODELS[model].credit}` : 'Compute this design';
     button.addEventListener('click', () => applyPreset(label));
     figures.append(button);
   }
@@ -137,7 +172,7 @@ function readParams() {
     for (const input of $('surface-params').querySelectorAll('input')) params.surfaceParams[input.dataset.param] = numberOf(input);
   }
   for (const spec of FORM_PARAMS) {
-    if (!supported(spec)) continue;
+    if (!supported(spec) || !applies(spec.name)) continue;
     const input = $(spec.name);
     params[spec.name] = spec.type === 'integer' || spec.type === 'number' ? numberOf(input) : spec.type === 'point' ? pointOf(input) : input.value.trim();
   }
@@ -157,6 +192,7 @@ function writeForm(params) {
     const value = params[spec.name] ?? spec.default;
     $(spec.name).value = spec.type === 'point' ? (value ?? []).join(', ') : String(value);
   }
+  showMethodOptions();
 }
 
 // ---------------------------------------------------------------- the design in the URL
@@ -164,7 +200,8 @@ function writeForm(params) {
 /** The design as a URL hash: only what differs from the defaults. */
 function designToHash(params) {
   const q = new URLSearchParams();
-  if (params.surface) q.set('surface', params.surface);
+  if (upload?.model) q.set('model', upload.model);
+  else if (params.surface) q.set('surface', params.surface);
   const spec = surfaces.find((s) => s.name === params.surface);
   for (const [k, v] of Object.entries(params.surfaceParams ?? {})) {
     if (spec?.parameters.find((p) => p.name === k)?.default !== v) q.set(`s.${k}`, String(v));
@@ -173,6 +210,11 @@ function designToHash(params) {
   if ($('view').value !== 'hex') q.set('view', $('view').value);
   if ($('color').value !== 'planarity') q.set('color', $('color').value);
   return `#${q}`;
+}
+
+/** The hash to keep in the URL for the shown design: an upload of the user's own is not in a link, so it keeps the last one. */
+function designLink(params) {
+  return upload && !upload.model ? location.hash : designToHash(params);
 }
 
 /** The design of a link (hash, or query as a fallback), or null when it has none. */
@@ -184,7 +226,7 @@ function designFromUrl() {
   const view = {};
   for (const [key, value] of q) {
     const spec = PARAMETERS.find((p) => p.name === key);
-    if (key === 'surface') params.surface = value;
+    if (key === 'surface' || key === 'model') params[key] = value;
     else if (key.startsWith('s.')) params.surfaceParams[key.slice(2)] = Number(value);
     else if (spec) params[key] = spec.type === 'integer' || spec.type === 'number' ? Number(value) : spec.type === 'point' ? value.split(',').map(Number) : value;
     else if (VIEW_KEYS.includes(key)) view[key] = value;
@@ -231,7 +273,8 @@ async function draw({ refit = false } = {}) {
     viewer.showPolygons(last.result[view], faceColor, shading());
     showLegend(legend);
   } else if (view === 'triangulation') {
-    viewer.showTriangles(last.result.triangulation, null, shading());
+    const { triangulation } = last.result;
+    viewer.showTriangles(triangulation, null, { ...shading(), markerRadius: MARKER_RADIUS * (triangulation.check?.edgeMean ?? 0) });
     showLegend(null);
   } else if (view === 'structure') {
     showLegend(null);
@@ -339,8 +382,28 @@ function showSpread(id, min, mean, max) {
   $(id).title = ok ? `mean ${mean.toPrecision(3)}` : '';
 }
 
+/** The field's singular points by index ("14 · +1: 13 · −1: 1 · sum 12"), coloured as their markers; – for none. */
+function showSingularities(singularities) {
+  const dd = $('singular-points');
+  if (!singularities?.index.length) {
+    dd.textContent = singularities ? '0' : '–';
+    return;
+  }
+  const byIndex = new Map();
+  let sum = 0;
+  for (const i of singularities.index) (byIndex.set(i, (byIndex.get(i) ?? 0) + 1), (sum += i));
+  const parts = [...byIndex].sort(([a], [b]) => b - a).map(([i, count]) => {
+    const span = document.createElement('span');
+    span.className = i > 0 ? 'pentagon' : 'heptagon';
+    span.textContent = `${i > 0 ? '+' : '−'}${Math.abs(i)}: ${count}`;
+    return span;
+  });
+  dd.replaceChildren(String(singularities.index.length), ...parts.flatMap((span) => [' · ', span]), ` · sum ${sum}`);
+}
+
 function showStats({ metrics, solve, timings, method, field, triangulation, duality }) {
   showNotes(triangulation?.notes ?? []);
+  showSingularities(method === 'global' ? triangulation.singularities : null);
   const invalidStars = triangulation?.check?.invalidStars?.length;
   $('triangulation-info').textContent = [method, field, invalidStars === undefined ? null : `${invalidStars} invalid stars`]
     .filter(Boolean)
@@ -403,7 +466,7 @@ async function compute() {
     showStats(result);
     for (const button of document.querySelectorAll('.exports button')) button.disabled = false;
     $('stage').textContent = `done in ${ms(result.timings.total)} ms`;
-    if (!upload) history.replaceState(null, '', designToHash(params));
+    history.replaceState(null, '', designLink(params));
     markShown(first);
     setState('ready');
     return 'ok';
@@ -447,8 +510,11 @@ function scheduleRun() {
   rerunTimer = setTimeout(compute, RERUN_DELAY_MS);
 }
 
-function applyPreset(label) {
-  setUpload(null);
+async function applyPreset(label) {
+  const { model } = PRESETS[label];
+  const loaded = model ? await modelUpload(model) : null;
+  if (model && !loaded) return;
+  setUpload(loaded);
   writeForm(structuredClone(PRESETS[label].params));
   if (PRESETS[label].view?.color) $('color').value = PRESETS[label].view.color;
   lastSurfaceKey = null; // frame the new design
@@ -457,10 +523,31 @@ function applyPreset(label) {
 
 // ---------------------------------------------------------------- uploads
 
+/** Sets the form to a link's design, with its bundled model as the upload where it names one. */
+async function openDesign({ params }) {
+  setUpload(params.model ? await modelUpload(params.model) : null);
+  writeForm(params);
+}
+
+/** A model bundled with the app (MODELS) as an upload, fetched; null, with the reason shown, when it cannot be. */
+async function modelUpload(name) {
+  try {
+    if (!MODELS[name]) throw new Error('no such model in this app');
+    const response = await fetch(MODELS[name].url);
+    if (!response.ok) throw new Error(`${response.status} ${response.statusText}`);
+    return { bytes: new Uint8Array(await response.arrayBuffer()), name, format: name.split('.').pop(), model: name };
+  } catch (error) {
+    showError(`Could not load the model ${name}: ${error.message}`);
+    return null;
+  }
+}
+
 function setUpload(value) {
   upload = value;
   $('mesh-source').hidden = !upload;
-  $('mesh-name').textContent = upload ? `Mesh: ${upload.name} (${(upload.bytes.length / 1024).toFixed(0)} kB)` : '';
+  // A bundled model names its source and licence (CC BY-SA asks for the credit where it is used).
+  const credit = upload?.model ? ` — ${MODELS[upload.model].credit}` : '';
+  $('mesh-name').textContent = upload ? `Mesh: ${upload.name} (${(upload.bytes.length / 1024).toFixed(0)} kB)${credit}` : '';
   $('surface').disabled = Boolean(upload);
   $('surface-params').disabled = Boolean(upload);
   // The analytic surface's description and parameters do not apply to an upload: hidden while one is loaded.
@@ -643,7 +730,7 @@ async function start() {
   document.body.dataset.meshInput = String(capabilities.meshInput);
   buildForm();
   const linked = designFromUrl();
-  writeForm(linked?.params ?? { surface: DEFAULT_SURFACE });
+  await openDesign(linked ?? { params: { surface: DEFAULT_SURFACE } });
   if (linked?.params.surface && !knownSurface(linked.params.surface)) {
     showError(`The link names an unknown surface "${linked.params.surface}"; showing the ${DEFAULT_SURFACE}.`);
   }
@@ -677,17 +764,18 @@ async function start() {
     phex.clearUploadCache().catch(() => {});
     compute();
   });
+  $('method').addEventListener('input', showMethodOptions);  // before the form's listener reads the parameters
   $('cancel').addEventListener('click', () => running?.abort());
   $('view').addEventListener('change', () => {
     $('structure-params').hidden = $('view').value !== 'structure';
-    draw().then(() => last && history.replaceState(null, '', upload ? location.hash : designToHash(last.params)));
+    draw().then(() => last && history.replaceState(null, '', designLink(last.params)));
   });
   let structureTimer = 0;
   $('structure-params').addEventListener('input', () => {
     clearTimeout(structureTimer);
     structureTimer = setTimeout(() => draw(), RERUN_DELAY_MS);
   });
-  $('color').addEventListener('change', () => draw().then(() => last && history.replaceState(null, '', upload ? location.hash : designToHash(last.params))));
+  $('color').addEventListener('change', () => draw().then(() => last && history.replaceState(null, '', designLink(last.params))));
   $('wireframe').addEventListener('change', () => viewer.setShading(shading()));
   $('flat').addEventListener('change', () => draw());
   $('fit').addEventListener('click', () => viewer.fitToView());
@@ -710,9 +798,7 @@ async function start() {
   addEventListener('hashchange', () => {
     const design = designFromUrl();
     if (!design || location.hash === designToHash(readParams())) return;
-    setUpload(null);
-    writeForm(design.params);
-    compute();
+    openDesign(design).then(compute);
   });
   addEventListener('error', (event) => showError(String(event.message)));
   addEventListener('unhandledrejection', (event) => showError(String(event.reason?.message ?? event.reason)));

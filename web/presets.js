@@ -1,5 +1,17 @@
-// phex web app — one-click designs after the paper's figures: the run parameters of each (surface,
-// triangulation method, direction field, §5.3 lower bound) and, optionally, the colouring to show.
+// phex web app — one-click designs after the paper's figures and on bundled models: the run parameters of each
+// (surface, triangulation method, direction field, §5.3 lower bound), the model uploaded in place of the surface
+// where there is one (`model`, a name in MODELS) and, optionally, the colouring to show.
+
+// Meshes bundled with the app (web/models/, their sources and licences in its README), by file name: the file's URL
+// and the credit the app shows with it. A literal `new URL(..., import.meta.url)` lets Vite emit each file with the
+// build; Node reads it from web/models/.
+export const MODELS = {
+  'phcpf_3holes_r.off': {
+    url: new URL('./models/phcpf_3holes_r.off', import.meta.url).href,
+    credit: '3holes_r.off from PH-CPF (Pluta, Edelstein, Vaxman, Ben-Chen 2021), CC BY-SA 4.0',
+  },
+};
+
 export const PRESETS = {
   'Fig. 1 cyclide, progressive conjugation': {
     params: { surface: 'cyclide', faces: 2500, method: 'progressive' },
@@ -68,5 +80,11 @@ export const PRESETS = {
   },
   'Two round bumps (umbilics: beyond the method, partly covered)': {
     params: { surface: 'freeform', faces: 2500, method: 'prespecified', field: 'principal' },
+  },
+  // Beyond the paper (§7 needs a network without singularities, which a closed surface of genus 3 cannot
+  // have): the global method's field places heptagons and pentagons whose indices add up to 12 (1 - 3) = -24.
+  'Genus 3 upload (PH-CPF), global field: heptagons at its singular points': {
+    model: 'phcpf_3holes_r.off',
+    params: { faces: 1500, method: 'global' },
   },
 };

@@ -1,5 +1,5 @@
-// phex web app — the three.js view: polygon meshes coloured per face, triangulations with field lines,
-// the surface coloured by curvature; picking a face under the pointer.
+// phex web app — the three.js view: polygon meshes coloured per face, triangulations with field lines and
+// singular points, the surface coloured by curvature; picking a face under the pointer.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { triangulateFaces } from 'phex';
@@ -7,6 +7,10 @@ import { triangulateFaces } from 'phex';
 export const BACKGROUND = 0xeef1f5;
 const EDGE_COLOR = 0x1d232b;
 const FIELD_COLOR = 0xd4148c;
+// Singular points of the global method's field, unlit so they read as these colours from any side: red where a
+// pentagon of the P-Hex mesh stands (index > 0), blue where a heptagon does (index < 0).
+export const PENTAGON_COLOR = 0xe0201c;
+export const HEPTAGON_COLOR = 0x1f4fe0;
 const PLAIN_COLOR = new THREE.Color(0xb9c6d6);
 
 export class Viewer {
@@ -70,6 +74,7 @@ export class Viewer {
   clear() {
     for (const child of [...this.#group.children]) {
       child.geometry.dispose();  // materials are shared (see surfaceMaterial) and stay
+      if (child.isInstancedMesh) child.dispose();  // its per-instance buffers
       this.#group.remove(child);
     }
     this.#faces = null;
@@ -142,8 +147,11 @@ export class Viewer {
     this.requestRender();
   }
 
-  /** A triangle mesh with per-vertex colours (or plain), its edges and optional polylines. */
-  showTriangles({ positions, triangles, fieldLines }, vertexColor, { flat, wireframe }) {
+  /**
+   * A triangle mesh with per-vertex colours (or plain), its edges, optional polylines and optional markers at
+   * singular points ({positions, index}, spheres of `markerRadius`).
+   */
+  showTriangles({ positions, triangles, fieldLines, singularities }, vertexColor, { flat, wireframe, markerRadius = 0 }) {
     const origin = displayOrigin(positions);
     positions = relativeTo(positions, origin);
     if (fieldLines) fieldLines = { ...fieldLines, positions: relativeTo(fieldLines.positions, origin) };
@@ -175,6 +183,11 @@ export class Viewer {
       const lines = polylineObject(fieldLines);
       lines.position.copy(origin);
       this.#group.add(lines);
+    }
+    if (singularities?.index.length && markerRadius > 0) {
+      const markers = singularityMarkers(singularities, origin, markerRadius);
+      markers.position.copy(origin);
+      this.#group.add(markers);
     }
     this.requestRender();
   }
@@ -381,6 +394,30 @@ function edgeLines(positions, pairs, color = EDGE_COLOR) {
   const geometry = new THREE.BufferGeometry();
   geometry.setAttribute('position', new THREE.BufferAttribute(position, 3));
   return new THREE.LineSegments(geometry, lineMaterial(color));
+}
+
+/**
+ * A sphere at each singular point (relative to `origin`), coloured by the sign of its index; a point of index ±2
+ * or more gets a larger sphere (radius × √|index|).
+ */
+function singularityMarkers({ positions, index }, origin, radius) {
+  const markers = new THREE.InstancedMesh(new THREE.SphereGeometry(1, 16, 12), markerMaterial(), index.length);
+  markers.name = 'singularities';
+  const matrix = new THREE.Matrix4();
+  const color = new THREE.Color();
+  for (let i = 0; i < index.length; i++) {
+    const r = radius * Math.sqrt(Math.max(1, Math.abs(index[i])));
+    matrix.makeScale(r, r, r).setPosition(positions[3 * i] - origin.x, positions[3 * i + 1] - origin.y, positions[3 * i + 2] - origin.z);
+    markers.setMatrixAt(i, matrix);
+    markers.setColorAt(i, color.setHex(index[i] > 0 ? PENTAGON_COLOR : HEPTAGON_COLOR));
+  }
+  markers.computeBoundingSphere();
+  return markers;
+}
+
+function markerMaterial() {
+  if (!materials.has('markers')) materials.set('markers', new THREE.MeshBasicMaterial({ color: 0xffffff }));
+  return materials.get('markers');
 }
 
 function polylineObject({ positions, offsets }) {

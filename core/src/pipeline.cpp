@@ -285,6 +285,7 @@ void toFileFrame(Triangulation& t, const Vec3& origin) {
   t.mesh.V.rowwise() += origin.transpose();
   for (std::vector<Vec3>& line : t.fieldLines)
     for (Vec3& p : line) p += origin;
+  for (FieldSingularity& s : t.singularities) s.position += origin;
   for (std::string& note : t.notes) note = inFileFrame(note, origin);
 }
 

@@ -8,6 +8,7 @@ import { after, before, test } from 'node:test';
 import { fileURLToPath } from 'node:url';
 import { chromium } from 'playwright-core';
 import { serve } from '../../scripts/serve.js';
+import { blobOFF } from '../js/meshes.js';
 
 const repo = fileURLToPath(new URL('../..', import.meta.url));
 const webDir = join(repo, 'build/web');
@@ -48,24 +49,32 @@ after(async () => {
   if (profile) rmSync(profile, { recursive: true, force: true });
 });
 
-/** Counts pixels of a PNG screenshot that differ clearly from the background colour, decoded in the page. */
-async function nonBackgroundPixels(png, on = page, background = BACKGROUND) {
+/**
+ * Counts pixels of a PNG screenshot, decoded in the page, within `tolerance` of the colour `rgb` (the sum of the
+ * channels' differences), of `total`.
+ */
+async function pixelsNear(png, rgb, tolerance, on = page) {
   return on.evaluate(
-    async ({ data, background }) => {
+    async ({ data, rgb, tolerance }) => {
       const bitmap = await createImageBitmap(new Blob([Uint8Array.from(atob(data), (c) => c.charCodeAt(0))]));
       const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
       const ctx = canvas.getContext('2d');
       ctx.drawImage(bitmap, 0, 0);
       const { data: pixels } = ctx.getImageData(0, 0, bitmap.width, bitmap.height);
-      let count = 0;
+      let near = 0;
       for (let i = 0; i < pixels.length; i += 4) {
-        const d = Math.abs(pixels[i] - background[0]) + Math.abs(pixels[i + 1] - background[1]) + Math.abs(pixels[i + 2] - background[2]);
-        if (d > 24) count++;
+        if (Math.abs(pixels[i] - rgb[0]) + Math.abs(pixels[i + 1] - rgb[1]) + Math.abs(pixels[i + 2] - rgb[2]) <= tolerance) near++;
       }
-      return { count, total: pixels.length / 4 };
+      return { near, total: pixels.length / 4 };
     },
-    { data: png.toString('base64'), background },
+    { data: png.toString('base64'), rgb, tolerance },
   );
+}
+
+/** Counts pixels of a PNG screenshot that differ clearly from the background colour. */
+async function nonBackgroundPixels(png, on = page, background = BACKGROUND) {
+  const { near, total } = await pixelsNear(png, background, 24, on);
+  return { count: total - near, total };
 }
 
 test('the default torus is computed and drawn on load', async () => {
@@ -128,6 +137,14 @@ test('export OBJ downloads the mesh', async () => {
   assert.equal(faces, Number(await page.textContent('#face-count')));
 });
 
+
+/** Counts pixels of a PNG screenshot near the colour `rgb` (see pixelsNear). */
+async function pixelsOf(png, rgb, tolerance = 60) {
+  return (await pixelsNear(png, rgb, tolerance)).near;
+}
+// The singular points' markers (web/viewer.js PENTAGON_COLOR, HEPTAGON_COLOR), drawn unlit.
+const PENTAGON_RGB = [0xe0, 0x20, 0x1c];
+const HEPTAGON_RGB = [0x1f, 0x4f, 0xe0];
 
 /** Runs the action and waits until the app has finished the run it started (or the runs it queued). */
 async function afterRun(action, on = page) {
@@ -390,6 +407,104 @@ test('a file dropped on the page is opened like a picked one', async () => {
   await page.waitForFunction(() => /dropped\.stl/.test(document.getElementById('error').textContent), null, { timeout: RUN_TIMEOUT_MS });
   await page.waitForFunction(() => document.body.dataset.state !== 'running', null, { timeout: RUN_TIMEOUT_MS });
   assert.equal(await page.isVisible('#drop-overlay'), false);
+  assert.deepEqual(pageErrors, []);
+});
+
+test('method global: its options show with their ranges, are named when out of range and land in the URL', async () => {
+  await afterRun(() => page.selectOption('#surface', 'ellipsoid'));
+  await afterRun(() => page.fill('#faces', '300'));
+  assert.equal(await page.isVisible('#anisotropy'), false, 'hidden under the other methods');
+  await afterRun(() => page.selectOption('#method', 'global'));
+  assert.equal(await page.getAttribute('body', 'data-state'), 'ready', await page.textContent('#error'));
+  assert.match(await page.textContent('#method-description'), /any surface.*pentagons and heptagons at its singular points/s);
+  for (const [id, range] of [['anisotropy', '1 – 8'], ['alignment', '0 – 10'], ['curvatureSizing', '0 – 1']]) {
+    assert.ok(await page.isVisible(`#${id}`), id);
+    assert.ok((await page.locator(`label:has(#${id})`).textContent()).includes(`(${range})`), id);
+  }
+  assert.equal(await page.isVisible('#field'), false, "the conjugate methods' field does not apply");
+  assert.match(page.url(), /method=global/);
+  assert.match(await page.textContent('#triangulation-info'), /^global/);
+  assert.match(await page.textContent('#singular-points'), /^\d+/);
+  await afterRun(() => page.fill('#anisotropy', '2'));
+  assert.match(page.url(), /anisotropy=2(&|$)/);
+
+  // An option out of range is named; the next value works.
+  await afterRun(() => page.fill('#curvatureSizing', '3'));
+  assert.equal(await page.getAttribute('body', 'data-state'), 'error');
+  assert.match(await page.textContent('#error'), /curvatureSizing/);
+  await afterRun(() => page.fill('#curvatureSizing', '0.5'));
+  assert.equal(await page.getAttribute('body', 'data-state'), 'ready', await page.textContent('#error'));
+  assert.match(page.url(), /curvatureSizing=0\.5/);
+
+  // A link restores the method and its options.
+  const other = await context.newPage();
+  try {
+    await other.goto(`${url}/#surface=ellipsoid&faces=300&method=global&alignment=2`);
+    await other.waitForSelector('body[data-state=ready]', { timeout: RUN_TIMEOUT_MS });
+    assert.equal(await other.inputValue('#method'), 'global');
+    assert.equal(await other.inputValue('#alignment'), '2');
+    assert.ok(await other.isVisible('#alignment'));
+  } finally {
+    await other.close();
+  }
+  await page.fill('#anisotropy', '1.5');
+  await afterRun(() => page.fill('#curvatureSizing', '0'));
+  assert.deepEqual(pageErrors, []);
+});
+
+test('method global on a closed upload: the triangulation view marks the singular points, counted in the statistics', async () => {
+  // The method stays chosen from the test above; a closed genus-0 blob needs singular points adding up to 12.
+  assert.equal(await page.inputValue('#method'), 'global');
+  await afterRun(() => page.setInputFiles('#file', { name: 'blob.off', mimeType: 'text/plain', buffer: Buffer.from(blobOFF(2)) }));
+  assert.equal(await page.getAttribute('body', 'data-state'), 'ready', await page.textContent('#error'));
+  const singular = await page.textContent('#singular-points');
+  assert.match(singular, /^\d+ · \+1: \d+.* · sum 12$/, singular);
+  await page.selectOption('#view', 'triangulation');
+  const png = await page.locator('#viewport').screenshot();
+  await page.screenshot({ path: join(artifacts, 'global-field.png') });
+  const red = await pixelsOf(png, PENTAGON_RGB);
+  assert.ok(red > 50, `${red} pixels of the pentagons' markers`);
+  await page.selectOption('#view', 'hex');
+  await afterRun(() => page.click('#mesh-clear'));
+  await afterRun(() => page.selectOption('#method', 'auto'));
+  assert.equal(await page.isVisible('#anisotropy'), false);
+  assert.doesNotMatch(page.url(), /anisotropy|curvatureSizing|method=/);
+  assert.equal(await page.textContent('#singular-points'), '–');
+  assert.deepEqual(pageErrors, []);
+});
+
+test('the genus-3 preset loads its bundled model, tiles it with the global method and marks its heptagons', async () => {
+  await afterRun(() => page.click('button[data-preset^="Genus 3"]'));
+  assert.equal(await page.getAttribute('body', 'data-state'), 'ready', await page.textContent('#error'));
+  assert.match(await page.textContent('#mesh-name'), /phcpf_3holes_r\.off/);
+  assert.equal(await page.inputValue('#method'), 'global');
+  assert.match(page.url(), /model=phcpf_3holes_r\.off/);
+  // Genus 3: the indices add up to 12 (1 - 3) = -24, so heptagons (-1) there must be.
+  const singular = await page.textContent('#singular-points');
+  assert.match(singular, /−1: \d+.* · sum -24$/, singular);
+  const hex = await page.locator('#viewport').screenshot();
+  const { count, total } = await nonBackgroundPixels(hex);
+  assert.ok(count > total * 0.05, `only ${count} of ${total} viewport pixels show the mesh`);
+  await page.screenshot({ path: join(artifacts, 'global-genus3.png') });
+  await page.selectOption('#view', 'triangulation');
+  const blue = await pixelsOf(await page.locator('#viewport').screenshot(), HEPTAGON_RGB);
+  await page.screenshot({ path: join(artifacts, 'global-genus3-field.png') });
+  assert.ok(blue > 50, `${blue} pixels of the heptagons' markers`);
+  await page.selectOption('#view', 'hex');
+
+  // Its link opens the model again.
+  const other = await context.newPage();
+  try {
+    await other.goto(page.url());
+    await other.waitForSelector('body[data-state=ready]', { timeout: RUN_TIMEOUT_MS });
+    assert.match(await other.textContent('#mesh-name'), /phcpf_3holes_r\.off/);
+    assert.equal(await other.textContent('#face-count'), await page.textContent('#face-count'));
+  } finally {
+    await other.close();
+  }
+  await afterRun(() => page.click('#mesh-clear'));
+  assert.doesNotMatch(page.url(), /model=/);
+  await afterRun(() => page.selectOption('#method', 'auto'));
   assert.deepEqual(pageErrors, []);
 });
 

@@ -68,3 +68,10 @@ test('wasm and native CLI tile the same uploaded mesh alike', { skip: noCli }, a
     rmSync(dir, { recursive: true, force: true });
   }
 });
+
+// The global method's field, lattice and extraction round to lattice points and pick among candidates: a last-bit
+// difference between the builds changes the mesh. Issue 31 asks for the same mesh in both; until the core gives
+// it (natively 660 faces, in wasm 652 for 600 asked), this is a todo that reports the difference.
+test('wasm and native CLI give the same torus by the global method', { skip: noCli, todo: 'the global method differs between the native and wasm builds' }, async () => {
+  await assertSameRun(['--surface', 'torus', '--faces', '600', '--method', 'global'], { surface: 'torus', faces: 600, method: 'global' });
+});

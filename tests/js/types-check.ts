@@ -1,6 +1,6 @@
 // phex — compiled by types.test.js with `tsc --noEmit --strict`: the typings must accept real use.
 import { createPHex, faceAreas, MESH_FORMATS, meshToOBJ, meshToPLY, PARAMETERS, PHexError, STRUCTURE_OPTIONS, triangulateFaces } from '../../wasm/js/phex.js';
-import type { Capabilities, MemoryUse, Progress, Result, RunParams, Structure, StructureOptions, SurfaceSpec } from '../../wasm/js/phex.js';
+import type { Capabilities, MemoryUse, Method, ParameterSpec, Progress, Result, RunParams, Singularities, Structure, StructureOptions, SurfaceSpec } from '../../wasm/js/phex.js';
 
 async function main(): Promise<void> {
   const phex = await createPHex({ worker: false });
@@ -17,6 +17,12 @@ async function main(): Promise<void> {
     ...(capabilities.methods.includes('prespecified') ? { method: 'prespecified', field: 'angle:30' } : {}),
   };
   const upload: RunParams = { mesh: new Uint8Array(0), meshFormat: MESH_FORMATS[0], meshName: 'patch.obj' };
+  // The global method and its options, on an upload or an analytic surface.
+  const method: Method = 'global';
+  const global: RunParams = capabilities.globalOptions
+    ? { surface: 'torus', faces: 600, method, anisotropy: 2, alignment: 0.5, curvatureSizing: 0 }
+    : { surface: 'torus', faces: 600, method };
+  const globalSpecs: ParameterSpec[] = PARAMETERS.filter((p) => p.requires === 'globalOptions' || p.name === 'curvatureSizing');
   const tooltips: string[] = PARAMETERS.map((p) => `${p.name} (${p.min ?? ''}..${p.max ?? ''}, default ${p.default}): ${p.description}`);
   const controller = new AbortController();
   try {
@@ -33,6 +39,11 @@ async function main(): Promise<void> {
     const stats: [number, number, number, number, boolean] = [hexagons, worst, positions.length + index.length, faceOfTriangle.length, result.solve.converged];
     console.log(version, stats, farNodes, areas.length, lines?.offsets.length, result.timings.total, result.solve.log.map((l) => l.planarityMax), meshToOBJ(result.initial).length);
     console.log(meshToOBJ(result.triangulation).length, meshToPLY(result.hex, { planarity: result.metrics.planarity }).length, tooltips.length);
+    const field = await phex.run(global);
+    const singular: Singularities | undefined = field.triangulation.singularities;
+    const pentagons: number = singular ? singular.index.filter((i) => i > 0).length : 0;
+    const first: [number, number, number] | null = singular && singular.index.length ? [singular.positions[0], singular.positions[1], singular.positions[2]] : null;
+    console.log(field.method === 'global', pentagons, first, globalSpecs.map((p) => `${p.name} ${p.min}..${p.max}`));
     if (capabilities.surfacePreview) {
       const preview = await phex.surfacePreview(params);
       console.log(preview.k1.length + preview.k2.length + preview.triangles.length);

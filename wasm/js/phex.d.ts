@@ -43,14 +43,31 @@ export interface Polylines {
   offsets: Uint32Array;
 }
 
+/** Singular points of a direction field, stored flat: point i is positions[3i .. 3i + 2] with index[i]. */
+export interface Singularities {
+  /** Coordinates x, y, z of each point, in the coordinates of the surface (of the uploaded file): 3 × point count. */
+  positions: Float64Array;
+  /** The turn of the field's directions around each point, in sixths of a turn: +1 or −1 mostly. */
+  index: Int32Array;
+}
+
 /** The triangle mesh laid on the surface, whose dual is the hexagonal mesh. */
 export interface Triangulation {
   /** Vertex coordinates: length 3 × vertex count. */
   positions: Float64Array;
   /** Vertex indices (0-based), three per triangle. */
   triangles: Uint32Array;
-  /** Integral lines of the direction field the triangulation follows, when the method has one. */
+  /**
+   * Integral lines of the direction field the triangulation follows, when the method has one; for method
+   * 'global', short segments of the field's three directions.
+   */
   fieldLines?: Polylines;
+  /**
+   * The singular points of the field method 'global' laid along (empty for the other methods): where its
+   * directions turn around a point. A P-Hex face of 6 − index corners stands at each (+1: a pentagon, −1: a
+   * heptagon). On a closed surface of genus g the indices add up to 12 (1 − g).
+   */
+  singularities?: Singularities;
   /** What the method had to do: lower bound active, steps re-used across parabolic curves, stars repaired, ... */
   notes: string[];
   /**
@@ -234,7 +251,7 @@ export interface Result {
 }
 
 /** A triangulation method (§5): see {@link RunParams.method}. */
-export type Method = 'auto' | 'lattice' | 'progressive' | 'prespecified' | 'subdivision';
+export type Method = 'auto' | 'lattice' | 'progressive' | 'prespecified' | 'subdivision' | 'global';
 
 /** A direction field for pre-specified conjugation (§5.3): see {@link RunParams.field}. */
 export type Field = 'principal' | `angle:${number}` | 'param' | 'param:u' | 'param:v' | 'radial' | 'diverging' | `diverging:${number}` | 'spiral' | `spiral:${number}` | 'section' | `section:${number}`;
@@ -316,18 +333,40 @@ export interface RunParams {
    * Triangulation method: 'auto' (default: the surface's recommended method, `SurfaceSpec.method`;
    * 'prespecified' for uploaded meshes, §7's geodesic route for a closed convex one, 'subdivision' for a closed convex polyhedron of fewer vertices than the faces asked for), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
    * conjugation along `field` (Method 2), 'subdivision' (Loop subdivision of a convex control mesh, §7:
-   * `surface` names a built-in control or `mesh` is the control), 'lattice' (parameter rows).
+   * `surface` names a built-in control or `mesh` is the control), 'lattice' (parameter rows), 'global' (any
+   * surface, uploaded or analytic, of any genus and boundary: a 6-fold direction field in the Dupin metric, a
+   * lattice along it and the triangle mesh extracted from it; every node of the P-Hex mesh joins three faces,
+   * pentagons and heptagons stand at the field's singular points, `triangulation.singularities`; options
+   * `anisotropy`, `alignment`, `curvatureSizing`).
    */
   method?: Method;
   /** Direction field of the conjugate methods. Default 'principal'. */
   field?: Field;
   /** §5.3 lower bound b on the step ratio |CM|/|AB| near parabolic curves, in [0, 2]. Default 0.3; 0 turns it off. */
   lowerBound?: number;
+  /**
+   * Method 'global': the largest ratio of the Dupin metric's two axes the field follows, in [1, 8]. Default 1.5;
+   * 1 gives triangles equilateral in space (an isotropic field), larger values follow the Dupin indicatrix further
+   * where it is elongated. Needs `capabilities().globalOptions`.
+   */
+  anisotropy?: number;
+  /**
+   * Method 'global': weight of the field's alignment with the principal direction of least |curvature| (where the
+   * curvature is anisotropic) against its smoothness, in [0, 10]. Default 1; 0 leaves the field free but along
+   * the boundary.
+   */
+  alignment?: number;
+  /**
+   * Method 'global': how far the cell follows the curvature, in [0, 1]. Default 0 (panels of one size); 1 shrinks
+   * the cells as the square root of the largest |curvature| relative to the surface's median (within a factor 3
+   * either way).
+   */
+  curvatureSizing?: number;
 }
 
 /** A run parameter as listed in {@link PARAMETERS}. */
 export interface ParameterSpec {
-  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound';
+  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing';
   /** 'point': an [x, y, z] array, or null for the default. */
   type: 'integer' | 'number' | 'enum' | 'field' | 'point';
   default: number | string | null;
@@ -337,7 +376,7 @@ export interface ParameterSpec {
   /** Accepted values of an enum (for 'field', 'angle:DEG' stands for any angle in degrees). */
   values?: readonly string[];
   /** The {@link Capabilities} entry the parameter needs, if any. */
-  requires?: 'methods' | 'fields' | 'lowerBound';
+  requires?: 'methods' | 'fields' | 'lowerBound' | 'globalOptions';
   description: string;
 }
 
@@ -359,6 +398,8 @@ export interface Capabilities {
   fields: string[];
   /** `lowerBound` is accepted. */
   lowerBound: boolean;
+  /** The options of method 'global' (`anisotropy`, `alignment`, `curvatureSizing`) are accepted. */
+  globalOptions: boolean;
   /** {@link PHex.surfacePreview} is available. */
   surfacePreview: boolean;
   /** {@link PHex.memory} is available (always true). */

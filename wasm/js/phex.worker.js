@@ -35,6 +35,7 @@ function capabilitiesOf(core) {
     methods: declared.methods ?? [],
     fields: declared.fields ?? [],
     lowerBound: Boolean(declared.lowerBound),
+    globalOptions: Boolean(declared.globalOptions),
     surfacePreview: typeof core.surfacePreview === 'function',
     memory: true,
   };

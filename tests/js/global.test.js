@@ -1,0 +1,123 @@
+// phex — method 'global' through the JS API (build/pkg/phex.js): any surface tiled along a 6-fold field, its
+// singular points returned, its options checked by name.
+// Run: node --no-experimental-fetch --test tests/js/   (after `make wasm`)
+import assert from 'node:assert/strict';
+import { after, before, test } from 'node:test';
+import { createPHex, PARAMETERS, PHexError } from '../../build/pkg/phex.js';
+import { assertClosedDual, assertNoCut, assertSingularities, blobOFF } from './meshes.js';
+
+let phex;
+before(async () => {
+  phex = await createPHex();
+});
+after(() => phex.dispose());
+
+test("the API offers method 'global' and documents its options with their defaults and ranges", () => {
+  const caps = phex.capabilities();
+  assert.ok(caps.methods.includes('global'), caps.methods.join());
+  assert.equal(caps.globalOptions, true);
+  const spec = Object.fromEntries(PARAMETERS.map((p) => [p.name, p]));
+  assert.ok(spec.method.values.includes('global'));
+  for (const [name, value, min, max] of [['anisotropy', 1.5, 1, 8], ['alignment', 1, 0, 10], ['curvatureSizing', 0, 0, 1]]) {
+    assert.deepEqual([spec[name].default, spec[name].min, spec[name].max], [value, min, max], name);
+    assert.match(spec[name].description, /global/, name);
+  }
+});
+
+// The core's global method is still being tuned (issue 31): it reaches planarity by cutting some faces in two.
+// What it returns is checked for consistency with its report (assertClosedDual); the goal of no cut is a todo
+// test, reported, not failing, until the core meets it.
+let torus;  // the global torus, shared
+const globalTorus = () => (torus ??= phex.run({ surface: 'torus', faces: 600, method: 'global' }));
+
+test("method 'global' tiles the torus: a closed planar P-Hex mesh, singular points adding up to 0 (genus 1)", async () => {
+  const r = await globalTorus();
+  assert.equal(r.method, 'global');
+  const summary = JSON.stringify({ faces: r.metrics.faceCount, bySize: r.metrics.facesBySize, planarity: r.metrics.planarityMax });
+  assert.ok(r.metrics.faceCount > 450 && r.metrics.faceCount < 800, summary);
+  assertClosedDual(r, 1);
+  assert.equal(r.metrics.selfIntersectingCount, 0, summary);
+  assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9, summary);
+
+  const sum = assertSingularities(r.triangulation.singularities);
+  assert.equal(sum, 0, `indices ${[...r.triangulation.singularities.index]}`);
+  // Each singular point lies on the torus (R 1, r 0.4 by default), within a cell of it.
+  const { positions } = r.triangulation.singularities;
+  const cell = r.triangulation.check.edgeMean;
+  for (let i = 0; i < positions.length; i += 3) {
+    const [x, y, z] = positions.subarray(i, i + 3);
+    const off = Math.abs(Math.hypot(Math.hypot(x, y) - 1, z) - 0.4);
+    assert.ok(off < cell, `singular point ${i / 3} is ${off} off the torus`);
+  }
+  // Its field, drawn in the triangulation view, comes as polylines like the other methods' field lines.
+  const { fieldLines } = r.triangulation;
+  assert.equal(fieldLines.positions.length, 3 * fieldLines.offsets.at(-1));
+});
+
+test("method 'global' on the torus: no face cut, every node of three faces (issue 31)", { todo: 'the core still cuts faces to reach planarity' }, async () => {
+  assertNoCut(await globalTorus());
+});
+
+let blob;  // the closed genus-0 upload's run, shared
+const globalBlob = () => (blob ??= phex.run({ mesh: blobOFF(), meshFormat: 'off', meshName: 'blob.off', method: 'global', faces: 400 }));
+
+test('a closed genus-0 upload: singular indices add up to 12, as do the P-Hex faces short of six corners (less the cuts)', async () => {
+  const r = await globalBlob();
+  const { index } = r.triangulation.singularities;
+  const sum = assertSingularities(r.triangulation.singularities);
+  assert.equal(sum, 12, `indices ${[...index]}`);
+  assertClosedDual(r, 0);
+  assert.equal(r.metrics.selfIntersectingCount, 0);
+  assert.ok(r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
+
+  // The same blob in site coordinates: its singular points come back beside its mesh, in the file's coordinates.
+  const site = [512345.678, 5432109.876, 250];
+  const far = await phex.run({ mesh: blobOFF(3, site), meshFormat: 'off', meshName: 'blob-site.off', method: 'global', faces: 400 });
+  assert.ok(far.origin.every((c, k) => Math.abs(c - site[k]) < 1), `origin ${far.origin}`);
+  assert.equal(assertSingularities(far.triangulation.singularities), 12);
+  const { positions } = far.triangulation.singularities;
+  for (let i = 0; i < positions.length; i += 3) {
+    const d = Math.hypot(...[0, 1, 2].map((k) => positions[i + k] - site[k]));
+    assert.ok(d < 2, `singular point ${i / 3} at ${positions.subarray(i, i + 3)}: ${d} from the blob's centre`);
+  }
+  await phex.clearUploadCache();
+});
+
+test('a closed genus-0 upload: no face cut, every node of three faces, Σ (6 − corners) = 12 on the P-Hex mesh (issue 31)', { todo: 'the core still cuts faces to reach planarity' }, async () => {
+  const r = await globalBlob();
+  assertNoCut(r);
+  assert.equal(hexagonDefect(r.hex), 12);
+});
+
+test('the other methods return no singular points', async () => {
+  const r = await phex.run({ surface: 'sphere', faces: 200 });
+  assert.notEqual(r.method, 'global');
+  assert.equal(assertSingularities(r.triangulation.singularities), 0);
+  assert.equal(r.triangulation.singularities.index.length, 0);
+});
+
+test("the global method's options out of range reject with a PHexError naming them, and the next run works", async () => {
+  const cases = [
+    [{ anisotropy: 0.5 }, /anisotropy/],
+    [{ anisotropy: 9 }, /anisotropy/],
+    [{ anisotropy: 'high' }, /anisotropy/],
+    [{ alignment: -1 }, /alignment/],
+    [{ alignment: 10.5 }, /alignment/],
+    [{ alignment: Number.NaN }, /alignment/],
+    [{ curvatureSizing: 1.5 }, /curvatureSizing/],
+    [{ curvatureSizing: -0.1 }, /curvatureSizing/],
+  ];
+  for (const [options, message] of cases) {
+    const error = await phex.run({ surface: 'torus', faces: 300, method: 'global', ...options }).then(
+      () => assert.fail(`${JSON.stringify(options)} resolved`),
+      (e) => e,
+    );
+    assert.ok(error instanceof PHexError, `${JSON.stringify(options)}: ${error}`);
+    assert.equal(error.code, 'invalid_parameter', JSON.stringify(options));
+    assert.match(error.message, message, JSON.stringify(options));
+  }
+  // The edges of the ranges are accepted, and the module computes again.
+  const r = await phex.run({ surface: 'torus', faces: 300, method: 'global', anisotropy: 1, alignment: 0, curvatureSizing: 1 });
+  assert.equal(r.method, 'global');
+  assert.ok(r.metrics.faceCount > 150, String(r.metrics.faceCount));
+});
