@@ -414,7 +414,6 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
   double planarity = fitPlanes();
   double lambda = options.lambda;
   double stalledFrom = planarity;  // planarity five sweeps ago, to notice a stall
-  double offFrom = nf;             // faces off the goal five sweeps ago
   for (int it = 1; it <= options.maxIterations; ++it) {
     checkCancel(cancel);
     const auto t0 = Clock::now();
@@ -441,15 +440,9 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
     // Where a few faces can only be made planar by large moves (e.g. a triangulation that ignores the
     // conjugate directions next to a parabolic curve) the sweeps crawl once λ is gone; stop there rather
     // than spin: the report says the goal was missed.
-    // A stall is the worst face not halving and no fewer faces off the goal than five sweeps before: a few faces
-    // held by the fold guard leave the rest converging (an uploaded car laid by the global method: the worst at
-    // 2e-2 from the tenth sweep on, while 900 others went on from 1e-4 towards the goal).
     if (lambda == 0 && it % 5 == 0) {
-      int off = 0;
-      for (int f = 0; f < nf; ++f) off += faceWorst[f] > options.tolerance;
-      if (planarity > 0.5 * stalledFrom && off > 0.9 * offFrom) break;
+      if (planarity > 0.5 * stalledFrom) break;
       stalledFrom = planarity;
-      offFrom = off;
     }
     // §6: λ divided by 10 per iteration; once it is far below the goal it can no longer matter.
     lambda = lambda * 0.1 > 1e-3 * options.tolerance ? lambda * 0.1 : 0.0;

@@ -1,4 +1,5 @@
 #include "phex/surfaces.hpp"
+#include "phex/portable_math.hpp"
 
 #include <cmath>
 #include <functional>
@@ -50,7 +51,7 @@ ParametricSurfacePtr revolution(std::string name, double v0, double v1, std::fun
                       bool closedMeridian = false) {
   return analytic(std::move(name), {0, 2 * kPi, v0, v1, true, closedMeridian}, [profile](double u, double v) {
     const Profile p = profile(v);
-    const double cu = std::cos(u), su = std::sin(u);
+    const double cu = portable::cos(u), su = portable::sin(u);
     const double r = p.rho.f, dr = p.rho.df, ddr = p.rho.ddf;
     ParametricSurface::Jet j;
     j.P = Vec3(r * cu, r * su, p.z.f);
@@ -89,7 +90,7 @@ ParametricSurfacePtr heightField(std::string name, double size, std::function<He
 ParametricSurfacePtr ellipsoid(std::string name, const Vec3& axes, double latitudeDeg) {
   const double vmax = radians(latitudeDeg);
   return analytic(std::move(name), {0, 2 * kPi, -vmax, vmax, true, false}, [axes](double u, double v) {
-    const double cu = std::cos(u), su = std::sin(u), cv = std::cos(v), sv = std::sin(v);
+    const double cu = portable::cos(u), su = portable::sin(u), cv = portable::cos(v), sv = portable::sin(v);
     ParametricSurface::Jet j;
     j.P = axes.cwiseProduct(Vec3(cv * cu, cv * su, sv));
     j.Pu = axes.cwiseProduct(Vec3(-cv * su, cv * cu, 0));
@@ -113,7 +114,7 @@ ParametricSurfacePtr cyclide(double a, double c, double mu, double uSpanDeg, dou
   const double hu = 0.5 * radians(uSpanDeg), hv = 0.5 * radians(vSpanDeg);
   const ParametricSurface::Domain domain{-hu, hu, kPi - hv, kPi + hv, closedU, closedV};
   return analytic("cyclide", domain, [a, b, c, mu](double u, double v) {
-    const double cu = std::cos(u), su = std::sin(u), cv = std::cos(v), sv = std::sin(v);
+    const double cu = portable::cos(u), su = portable::sin(u), cv = portable::cos(v), sv = portable::sin(v);
     const double b2 = b * b;
     const Vec3 N(mu * (c - a * cu * cv) + b2 * cu, b * su * (a - mu * cv), b * sv * (c * cu - mu));
     const Vec3 Nu(mu * a * su * cv - b2 * su, b * cu * (a - mu * cv), -b * c * su * sv);
@@ -154,7 +155,7 @@ ParametricSurfacePtr enneper(double R) {
 // crosses the axis without a singularity. Pu x Pv = (c sin t, -c cos t, s): the normal rises where s > 0.
 ParametricSurfacePtr helicoid(double radius, double c, double halfAngle) {
   return analytic("helicoid", {-radius, radius, -halfAngle, halfAngle, false, false}, [c](double s, double t) {
-    const double ct = std::cos(t), st = std::sin(t);
+    const double ct = portable::cos(t), st = portable::sin(t);
     ParametricSurface::Jet j;
     j.P = Vec3(s * ct, s * st, c * t);
     j.Pu = Vec3(ct, st, 0);
@@ -169,7 +170,7 @@ ParametricSurfacePtr helicoid(double radius, double c, double halfAngle) {
 // h exp(-|p - centre|^2 / (2 w^2)) and its derivatives.
 Height gaussian(double x, double y, double cx, double cy, double h, double w) {
   const double dx = x - cx, dy = y - cy, w2 = w * w;
-  const double g = h * std::exp(-(dx * dx + dy * dy) / (2 * w2));
+  const double g = h * portable::exp(-(dx * dx + dy * dy) / (2 * w2));
   return {g, -dx / w2 * g, -dy / w2 * g, (dx * dx / w2 - 1) / w2 * g, dx * dy / (w2 * w2) * g,
           (dy * dy / w2 - 1) / w2 * g};
 }
@@ -197,7 +198,7 @@ const std::vector<Entry>& registry() {
            throw Error(ErrorCode::InvalidParameter, "torus: r must be less than R (got r=" + std::to_string(r) +
                                                         ", R=" + std::to_string(R) + ")");
          return revolution("torus", -kPi, kPi, [R, r](double v) {
-           const double c = std::cos(v), s = std::sin(v);
+           const double c = portable::cos(v), s = portable::sin(v);
            return Profile{{R + r * c, -r * s, -r * c}, {r * s, r * c, -r * s}};
          }, true);
        }},
@@ -224,9 +225,9 @@ const std::vector<Entry>& registry() {
          {"c", 0.8, 1e-6, 1e6, "the asymptotic cone rises c per a outward; Gaussian curvature -1/c^2 at the waist"},
          {"height", 2.0, 1e-6, 1e6, "total height, centred on the waist"}}},
        [](const SurfaceParams& p) {
-         const double a = p.at("a"), c = p.at("c"), t = std::asinh(0.5 * p.at("height") / c);
+         const double a = p.at("a"), c = p.at("c"), t = portable::asinh(0.5 * p.at("height") / c);
          return revolution("hyperboloid", -t, t, [a, c](double v) {
-           const double ch = std::cosh(v), sh = std::sinh(v);
+           const double ch = portable::cosh(v), sh = portable::sinh(v);
            return Profile{{a * ch, a * sh, a * ch}, {c * sh, c * ch, c * sh}};
          });
        }},
@@ -258,7 +259,7 @@ const std::vector<Entry>& registry() {
                        "vase: bulge must be less than radius (got bulge=" + str(A) + ", radius=" + str(R) + ")");
          const double w = 2 * kPi / H;
          return revolution("vase", 0, H, [R, A, w](double v) {
-           const double s = std::sin(w * v), c = std::cos(w * v);
+           const double s = portable::sin(w * v), c = portable::cos(w * v);
            return Profile{{R + A * s, A * w * c, -A * w * w * s}, {v, 1, 0}};
          });
        }},
@@ -297,7 +298,7 @@ const std::vector<Entry>& registry() {
          {"start", 0.5, 1e-3, 1e6, "distance from the apex, along the rulings, where the surface starts"},
          {"length", 2.0, 1e-6, 1e6, "length of the rulings kept"}}},
        [](const SurfaceParams& p) {
-         const double sa = std::sin(radians(p.at("angle"))), ca = std::cos(radians(p.at("angle")));
+         const double sa = portable::sin(radians(p.at("angle"))), ca = portable::cos(radians(p.at("angle")));
          const double s0 = p.at("start");
          return revolution("cone", s0, s0 + p.at("length"),
                            [sa, ca](double v) { return Profile{{v * sa, sa, 0}, {v * ca, ca, 0}}; });
@@ -317,7 +318,7 @@ const std::vector<Entry>& registry() {
        [](const SurfaceParams& p) {
          const double c = p.at("c"), h = 0.5 * p.at("height");
          return revolution("catenoid", -h, h, [c](double v) {
-           const double ch = std::cosh(v / c), sh = std::sinh(v / c);
+           const double ch = portable::cosh(v / c), sh = portable::sinh(v / c);
            return Profile{{c * ch, sh, ch / c}, {v, 1, 0}};
          });
        }},
@@ -365,7 +366,7 @@ const std::vector<Entry>& registry() {
                                                         str(R) + ", size=" + str(L) + ")");
          return heightField("wave-roof", L, [R, A, w, b](double x, double y) {
            const double q = R * R - y * y, sq = std::sqrt(q);
-           const double u = w * x + b * y * y, su = std::sin(u), cu = std::cos(u);
+           const double u = w * x + b * y * y, su = portable::sin(u), cu = portable::cos(u);
            const double uy = 2 * b * y;
            return Height{R - sq + A * su,
                          A * w * cu,
