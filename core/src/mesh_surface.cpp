@@ -1000,8 +1000,7 @@ void MeshSurface::buildGrid() {
 }
 
 int MeshSurface::gridCellOf(double x, int axis) const {
-  const double q = std::floor((x - gridOrigin_(axis)) * gridInverseCell_);
-  return q >= 0 ? (q < gridSize_[axis] ? static_cast<int>(q) : gridSize_[axis] - 1) : 0;  // NaN: 0, never cast
+  return gridCell((x - gridOrigin_(axis)) * gridInverseCell_, gridSize_[axis]);
 }
 
 bool MeshSurface::searchGrid(const Vec3& p, double& best, int& triangle, Vec3& barycentric) const {
