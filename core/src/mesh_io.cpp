@@ -47,12 +47,12 @@ TriMesh toTriMesh(const RawMesh& raw) {
   return mesh;
 }
 
-void checkTriangleLimit(const std::string& name, std::size_t triangles) {
+void checkTriangleLimit(const std::string& name, std::uint64_t triangles) {  // 64 bits: counts from files, in wasm too
   if (triangles > kMaxMeshTriangles)
     fail(name, "more than " + std::to_string(kMaxMeshTriangles) + " triangles (phex's limit)");
 }
 
-void checkVertexLimit(const std::string& name, std::size_t vertices) {
+void checkVertexLimit(const std::string& name, std::uint64_t vertices) {
   if (vertices > kMaxMeshVertices)
     fail(name, "more than " + std::to_string(kMaxMeshVertices) + " vertices (phex's limit)");
 }
@@ -113,14 +113,15 @@ class TextReader {
     if (requireFinite && !std::isfinite(x)) fail(std::string(what) + " is " + std::string(t) + " (coordinates must be finite)");
     return x;
   }
-  long integer(std::string_view t, const char* what) {
+  // 64 bits in wasm too (its long has 32): the same numbers are in range, with the same messages, everywhere.
+  long long integer(std::string_view t, const char* what) {
     char buf[32];
     if (t.size() >= sizeof buf) fail(std::string(what) + " '" + std::string(t.substr(0, 20)) + "...' is too long for an integer");
     std::memcpy(buf, t.data(), t.size());
     buf[t.size()] = '\0';
     char* end = nullptr;
     errno = 0;
-    const long x = std::strtol(buf, &end, 10);
+    const long long x = std::strtoll(buf, &end, 10);
     if (t.empty() || end != buf + t.size()) fail(std::string(what) + " '" + std::string(t) + "' is not an integer");
     if (errno == ERANGE) fail(std::string(what) + " " + std::string(t) + " is out of range");
     return x;
@@ -388,7 +389,7 @@ RawMesh readObj(const std::uint8_t* data, std::size_t size, const std::string& n
   TextReader in(data, size, name, 0, 1, true);
   RawMesh mesh;
   std::vector<int> polygonIds, offsets{0}, polygonLine;
-  long forwardIndex = 0;
+  long long forwardIndex = 0;
   int forwardLine = 0;
   std::string_view t;
   while (in.token(t)) {
@@ -403,13 +404,13 @@ RawMesh readObj(const std::uint8_t* data, std::size_t size, const std::string& n
       const int before = static_cast<int>(polygonIds.size());
       std::string_view ref;
       while (in.tokenOnLine(ref)) {
-        const long i = in.integer(ref.substr(0, ref.find('/')), "vertex index");
-        const long defined = mesh.vertexCount();
+        const long long i = in.integer(ref.substr(0, ref.find('/')), "vertex index");
+        const long long defined = mesh.vertexCount();
         if (i == 0) in.fail("vertex index 0 (OBJ counts from 1)");
         if (i < -defined)  // not -i > defined: -LONG_MIN overflows
           in.fail("relative vertex index " + std::to_string(i) + " reaches before the first vertex (" +
                   std::to_string(defined) + " defined so far)");
-        if (i > static_cast<long>(kMaxMeshVertices)) in.fail("vertex index " + std::to_string(i) + " is out of range");
+        if (i > static_cast<long long>(kMaxMeshVertices)) in.fail("vertex index " + std::to_string(i) + " is out of range");
         if (i > defined && i > forwardIndex) forwardIndex = i, forwardLine = in.line();
         polygonIds.push_back(static_cast<int>(i < 0 ? defined + i : i - 1));
       }
@@ -440,18 +441,18 @@ RawMesh readOff(const std::uint8_t* data, std::size_t size, const std::string& n
   const std::string_view magic = in.require("the OFF header");
   if (magic != "OFF" && magic != "COFF" && magic != "NOFF" && magic != "CNOFF")
     in.fail("expected 'OFF' on the first line, found '" + std::string(magic.substr(0, 20)) + "'");
-  const long nv = in.integer(in.require("the vertex count"), "vertex count");
-  const long nf = in.integer(in.require("the face count"), "face count");
+  const long long nv = in.integer(in.require("the vertex count"), "vertex count");
+  const long long nf = in.integer(in.require("the face count"), "face count");
   in.integer(in.require("the edge count"), "edge count");
   if (nv < 0 || nf < 0) in.fail("negative vertex or face count");
-  checkVertexLimit(name, static_cast<std::size_t>(nv));
-  checkTriangleLimit(name, static_cast<std::size_t>(nf));
+  checkVertexLimit(name, static_cast<std::uint64_t>(nv));
+  checkTriangleLimit(name, static_cast<std::uint64_t>(nf));
   // Each vertex and face needs at least 6 bytes of text: a count beyond that is wrong, not a reason to allocate.
   if (static_cast<std::size_t>(nv + nf) > size / 6) in.fail("the header declares more vertices and faces than the file can hold");
   in.skipLine();
   RawMesh mesh;
   mesh.xyz.reserve(3 * nv);
-  for (long v = 0; v < nv; ++v) {
+  for (long long v = 0; v < nv; ++v) {
     std::string_view c;
     for (int k = 0; k < 3; ++k) {
       if (!in.token(c)) in.fail("file ends after " + std::to_string(v) + " of the " + std::to_string(nv) + " vertices declared");
@@ -461,15 +462,15 @@ RawMesh readOff(const std::uint8_t* data, std::size_t size, const std::string& n
   }
   std::vector<int> ids;
   PolygonTriangulator polygons;
-  for (long f = 0; f < nf; ++f) {
+  for (long long f = 0; f < nf; ++f) {
     std::string_view c;
     if (!in.token(c)) in.fail("file ends after " + std::to_string(f) + " of the " + std::to_string(nf) + " faces declared");
-    const long n = in.integer(c, "face size");
+    const long long n = in.integer(c, "face size");
     if (n < 3) in.fail("face " + std::to_string(f) + " has " + std::to_string(n) + " vertices (at least 3 needed)");
     ids.clear();
-    for (long k = 0; k < n; ++k) {
+    for (long long k = 0; k < n; ++k) {
       if (!in.tokenOnLine(c)) in.fail("face " + std::to_string(f) + " lists fewer than the " + std::to_string(n) + " vertices it declares");
-      const long i = in.integer(c, "vertex index");
+      const long long i = in.integer(c, "vertex index");
       if (i < 0 || i >= nv)
         in.fail("face " + std::to_string(f) + ": vertex index " + std::to_string(i) + " is out of range (the file has " +
                 std::to_string(nv) + " vertices, counted from 0)");
@@ -512,7 +513,7 @@ std::size_t plySize(PlyType t) {
 bool plyIsInteger(PlyType t) { return t != PlyType::Float32 && t != PlyType::Float64; }
 
 // The values an integer type holds, and its name, for ascii values that must fit the type declared.
-void plyRange(PlyType t, long& lo, long& hi, const char*& name) {
+void plyRange(PlyType t, long long& lo, long long& hi, const char*& name) {
   switch (t) {
     case PlyType::Int8: lo = INT8_MIN, hi = INT8_MAX, name = "char"; return;
     case PlyType::UInt8: lo = 0, hi = UINT8_MAX, name = "uchar"; return;
@@ -532,7 +533,7 @@ struct PlyProperty {
 
 struct PlyElement {
   std::string name;
-  std::size_t count = 0;
+  std::uint64_t count = 0;  // not size_t: wasm's has 32 bits, and the header's count is checked whole
   std::vector<PlyProperty> properties;
 };
 
@@ -544,7 +545,7 @@ class PlyBody {
       : data_(data), size_(size), pos_(start), ascii_(encoding == "ascii"), bigEndian_(encoding == "binary_big_endian"),
         text_(data, size, name, start, line), name_(name) {}
 
-  void at(const std::string& element, std::size_t index) { element_ = element, index_ = index; }
+  void at(const std::string& element, std::uint64_t index) { element_ = element, index_ = index; }
 
   double value(PlyType t, const char* what) {
     if (ascii_) {
@@ -552,8 +553,8 @@ class PlyBody {
       if (!text_.token(tok)) fail("file ends inside " + where());
       if (!plyIsInteger(t)) return text_.number(tok, what, false);
       // An integer out of its type's range is no value the type holds (and no count or index phex can use).
-      const long x = text_.integer(tok, what);
-      long lo, hi;
+      const long long x = text_.integer(tok, what);
+      long long lo, hi;
       const char* type;
       plyRange(t, lo, hi, type);
       if (x < lo || x > hi)
@@ -602,7 +603,7 @@ class PlyBody {
   bool ascii_, bigEndian_;
   TextReader text_;
   std::string name_, element_;
-  std::size_t index_ = 0;
+  std::uint64_t index_ = 0;
 };
 
 // True when the bytes look like text (only printable characters and line ends): binary data does not.
@@ -635,11 +636,11 @@ RawMesh readPly(const std::uint8_t* data, std::size_t size, const std::string& n
     } else if (word == "element") {
       PlyElement e;
       e.name = std::string(header.require("the element name"));
-      const long count = header.integer(header.require("the element count"), "element count");
+      const long long count = header.integer(header.require("the element count"), "element count");
       if (count < 0) header.fail("negative count for element '" + e.name + "'");
       for (const PlyElement& before : elements)
         if (before.name == e.name && (e.name == "vertex" || e.name == "face")) header.fail("a second '" + e.name + "' element");
-      e.count = static_cast<std::size_t>(count);
+      e.count = static_cast<std::uint64_t>(count);
       const std::size_t limit = e.name == "vertex" ? kMaxMeshVertices : kMaxMeshTriangles;
       if ((e.name == "vertex" || e.name == "face") && e.count > limit)
         header.fail("more than " + std::to_string(limit) + " " + (e.name == "vertex" ? "vertices" : "faces") + " (phex's limit)");
@@ -703,18 +704,18 @@ RawMesh readPly(const std::uint8_t* data, std::size_t size, const std::string& n
     }
     if (isVertex) {
       if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0) fail(name, "the vertex element lacks an x, y or z property");
-      mesh.xyz.resize(3 * e.count);
+      mesh.xyz.resize(3 * static_cast<std::size_t>(e.count));
       sawVertex = true;
     }
     if (isFace) {
       if (indices < 0) fail(name, "the face element has no vertex_indices list");
       if (!plyIsInteger(e.properties[indices].type)) fail(name, "face vertex indices must have an integer type");
-      mesh.tri.reserve(3 * e.count);
+      mesh.tri.reserve(3 * static_cast<std::size_t>(e.count));
       sawFace = true;
     }
     std::vector<int> ids;
     PolygonTriangulator polygons;
-    for (std::size_t i = 0; i < e.count; ++i) {
+    for (std::uint64_t i = 0; i < e.count; ++i) {
       body.at(e.name, i);
       for (int k = 0; k < static_cast<int>(e.properties.size()); ++k) {
         const PlyProperty& p = e.properties[k];
@@ -731,15 +732,15 @@ RawMesh readPly(const std::uint8_t* data, std::size_t size, const std::string& n
         if (n < 0) body.fail("negative list length in " + body.where());
         // Each item takes at least a byte (binary: its size): a longer list than the bytes left is a wrong length.
         if (n > static_cast<double>(body.left() / (body.ascii() ? 1 : plySize(p.type))))
-          body.fail("the list of " + body.where() + " declares " + std::to_string(static_cast<long>(n)) + " items, but only " +
+          body.fail("the list of " + body.where() + " declares " + std::to_string(static_cast<long long>(n)) + " items, but only " +
                     std::to_string(body.left()) + " bytes are left (truncated file or wrong length)");
         const bool keep = isFace && k == indices;
         if (keep) {
-          if (n < 3) body.fail(body.where() + " has " + std::to_string(static_cast<long>(n)) + " vertices (at least 3 needed)");
+          if (n < 3) body.fail(body.where() + " has " + std::to_string(static_cast<long long>(n)) + " vertices (at least 3 needed)");
           if (!sawVertex) fail(name, "the face element comes before the vertex element");
           ids.clear();
         }
-        for (long j = 0; j < static_cast<long>(n); ++j) {
+        for (long long j = 0; j < static_cast<long long>(n); ++j) {
           const double x = body.value(p.type, "a list item");
           if (!keep) continue;
           if (x < 0 || x >= mesh.vertexCount())
@@ -1126,8 +1127,8 @@ TriMesh readMesh(const std::string& path, MeshReadReport* report) {
   if (!in) throw Error(ErrorCode::Io, "cannot open mesh file '" + path + "' (does it exist and is it readable?)");
   const std::streamoff size = in.tellg();
   if (size < 0) throw Error(ErrorCode::Io, "cannot read mesh file '" + path + "'");
-  if (static_cast<std::size_t>(size) > kMaxMeshFileBytes)
-    fail(path, std::to_string(static_cast<std::size_t>(size) >> 20) + " MiB is more than phex reads (" +
+  if (static_cast<std::uint64_t>(size) > kMaxMeshFileBytes)
+    fail(path, std::to_string(static_cast<std::uint64_t>(size) >> 20) + " MiB is more than phex reads (" +
                    std::to_string(kMaxMeshFileBytes >> 20) + " MiB)");
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
   in.seekg(0);
