@@ -16,7 +16,7 @@ for t in "${targets[@]}"; do
            -artifact_prefix="$build/findings/$t-")
   # Readers take files: their keywords help; the others take structured bytes (fuzz.hpp).
   case "$t" in read_*) options+=(-dict="$here/mesh.dict") ;; esac
-  log="$build/$t.log"
+  log="$build/$t-$$.log"  # one per run: a campaign and make test may fuzz at the same time
   if nice "$build/fuzz_$t" "${options[@]}" "$build/corpus/$t" "$here/corpus/$t" "$here/regressions" >"$log" 2>&1; then
     status=ok
   else
@@ -25,10 +25,10 @@ for t in "${targets[@]}"; do
   fi
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo "?")
   cov=$(grep -o 'cov: [0-9]* ft: [0-9]*' "$log" | tail -1 || true)
-  printf '%-13s %s  %s executions in %ss, %s\n' "$t" "$status" "$runs" "$seconds" "$cov"
+  printf '%-13s %s  %s executions in %ss, %s  (%s)\n' "$t" "$status" "$runs" "$seconds" "$cov" "${log#"$here/../../"}"
 done
 if [ ${#failed[@]} -gt 0 ]; then
-  for t in "${failed[@]}"; do echo "== $t (build/fuzz/$t.log)"; grep -A25 -m1 'ERROR\|phex fuzz finding\|==.*==' "$build/$t.log" | head -40; done
+  for t in "${failed[@]}"; do echo "== $t"; grep -A25 -m1 'ERROR\|phex fuzz finding\|==.*==' "$build/$t-$$.log" | head -40; done
   echo "fuzzing found something in: ${failed[*]} (inputs in build/fuzz/findings/)"
   exit 1
 fi
