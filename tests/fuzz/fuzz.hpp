@@ -70,7 +70,11 @@ inline phex::TriMesh decodeMesh(Input& in) {
   return m;
 }
 
-// One thread: a run is the same whatever the count, and pool threads would only slow the sanitizers.
-inline void oneThread() { phex::setThreadCount(1); }
-
 }  // namespace phex_fuzz
+
+// Each target is its own program, including this once. One thread: a run is the same whatever the count, and
+// pool threads would only slow the sanitizers down.
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  phex::setThreadCount(1);
+  return 0;
+}

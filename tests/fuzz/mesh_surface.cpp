@@ -7,11 +7,6 @@
 
 using namespace phex_fuzz;
 
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  oneThread();
-  return 0;
-}
-
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   Input in{data, size};
   const phex::TriMesh raw = decodeMesh(in);
