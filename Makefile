@@ -72,6 +72,9 @@ bench: native wasm web
 	@$(NODE) bench/mesh-curvature-wasm.mjs
 	@echo "== laying triangulations, native"
 	@build/native/bin/phex_bench_laying
+	@echo "== the structure (axes, offset, beams, solid model), native then wasm, beside the pipeline"
+	@build/native/bin/phex_bench_structure
+	@$(NODE) bench/structure-wasm.mjs
 	@echo "== web app in headless Chromium"
 	@node bench/browser.mjs
 

@@ -7,9 +7,11 @@
 #include <phex/error.hpp>
 #include <phex/panels.hpp>
 #include <phex/pipeline.hpp>
+#include <phex/structure.hpp>
 
 #include <malloc.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -371,9 +373,23 @@ phex::PolyMesh polyMeshFromJs(const val& o) {
   return m;
 }
 
+// The structure options of `options` ({offset, beamHeight, beamWidth, panelThickness}; missing: the defaults).
+phex::StructureOptions structureOptionsFromJs(const val& options) {
+  phex::StructureOptions o;
+  if (options.isUndefined() || options.isNull()) return o;
+  if (options.typeOf().as<std::string>() != "object")
+    throw phex::Error(phex::ErrorCode::InvalidParameter, "structure options must be an object");
+  if (has(options, "offset")) o.offset = number(options, "offset");
+  if (has(options, "beamHeight")) o.beamHeight = number(options, "beamHeight");
+  if (has(options, "beamWidth")) o.beamWidth = number(options, "beamWidth");
+  if (has(options, "panelThickness")) o.panelThickness = number(options, "panelThickness");
+  return o;
+}
+
 // Fabrication output of `mesh`: {ok, text} with options.format 'svg' (the faces laid flat on a cut sheet), 'csv'
-// (the panel schedule) or 'beams' (the beam schedule); options.gap, width, unit and labels shape the sheet
-// (phex::PanelSheetOptions).
+// (the panel schedule), 'beams' (the beam schedule; with options.beamHeight, extended by the structure's beams),
+// 'nodes' (the node schedule) or 'structure-obj' (the structure's solid model as OBJ, with the structure options);
+// options.gap, width, unit and labels shape the sheet (phex::PanelSheetOptions).
 val fabrication(val mesh, val options) {
   return guarded([&] {
     phex::PanelSheetOptions sheet;
@@ -391,17 +407,132 @@ val fabrication(val mesh, val options) {
         sheet.labels = options["labels"].as<bool>();
       }
     }
-    if (format != "svg" && format != "csv" && format != "beams")
-      throw phex::Error(phex::ErrorCode::InvalidParameter, "format must be 'svg', 'csv' or 'beams' (got '" + format + "')");
+    if (format != "svg" && format != "csv" && format != "beams" && format != "nodes" && format != "structure-obj")
+      throw phex::Error(phex::ErrorCode::InvalidParameter,
+                        "format must be 'svg', 'csv', 'beams', 'nodes' or 'structure-obj' (got '" + format + "')");
+    // The structure's schedules and solid model take its options too (offset, beamHeight, beamWidth, panelThickness).
+    const phex::StructureOptions o = structureOptionsFromJs(format == "svg" || format == "csv" ? val::undefined() : options);
+    phex::validate(o);
     const phex::PolyMesh m = polyMeshFromJs(mesh);
     val out = val::object();
     out.set("ok", true);
-    if (format == "beams") {
+    if (format == "beams" && o.beamHeight) {
+      const phex::Structure s = phex::buildStructure(m, o);
+      out.set("text", phex::beamsCsv(m, s.axes, s.beams));
+    } else if (format == "beams") {
       out.set("text", phex::beamsCsv(m));
+    } else if (format == "nodes") {
+      out.set("text", phex::nodesCsv(m, phex::nodeAxes(m)));
+    } else if (format == "structure-obj") {
+      out.set("text", phex::toObj(phex::buildStructure(m, o).model));
     } else {
       const std::vector<phex::Panel> flat = phex::flattenPanels(m);
       out.set("text", format == "svg" ? phex::panelsSvg(flat, sheet) : phex::panelsCsv(flat));
     }
+    return out;
+  });
+}
+
+// A solid part as {positions (Float32Array, relative to the model's origin), index, element} for a three.js
+// BufferGeometry.
+val solidToJs(const phex::SolidPart& part) {
+  val out = val::object();
+  const std::vector<float> xyz(part.V.data(), part.V.data() + part.V.size());
+  out.set("positions", copyArray("Float32Array", xyz.data(), xyz.size()));
+  const std::vector<std::uint32_t> index(part.F.data(), part.F.data() + part.F.size());
+  out.set("index", copyArray("Uint32Array", index.data(), index.size()));
+  const std::vector<std::uint32_t> element(part.element.begin(), part.element.end());
+  out.set("element", copyArray("Uint32Array", element.data(), element.size()));
+  out.set("count", part.elements);
+  return out;
+}
+
+// The structure on a polygon mesh (phex::buildStructure): node axes, the offset mesh where options.offset is
+// given, the beams and the solid model, with what the core reports about them.
+val structure(val mesh, val options) {
+  return guarded([&] {
+    const phex::StructureOptions o = structureOptionsFromJs(options);
+    phex::validate(o);  // before the mesh is copied in: a bad option is named at once
+    const phex::PolyMesh m = polyMeshFromJs(mesh);
+    const phex::Structure s = phex::buildStructure(m, o);
+    const phex::NodeAxes& ax = s.axes;
+    val out = val::object();
+    out.set("ok", true);
+    if (s.offset) out.set("offset", meshToJs(*s.offset));
+    val nodes = val::object();
+    nodes.set("positions", copyArray("Float64Array", ax.position.data(), static_cast<std::size_t>(ax.position.size())));
+    nodes.set("axes", copyArray("Float64Array", ax.axis.data(), static_cast<std::size_t>(ax.axis.size())));
+    const std::vector<std::uint8_t> kind(reinterpret_cast<const std::uint8_t*>(ax.kind.data()),
+                                         reinterpret_cast<const std::uint8_t*>(ax.kind.data()) + ax.kind.size());
+    nodes.set("kind", copyArray("Uint8Array", kind.data(), kind.size()));
+    const std::vector<std::uint32_t> bestFit(ax.bestFit.begin(), ax.bestFit.end()), folded(ax.folded.begin(), ax.folded.end());
+    nodes.set("bestFit", copyArray("Uint32Array", bestFit.data(), bestFit.size()));
+    nodes.set("folded", copyArray("Uint32Array", folded.data(), folded.size()));
+    nodes.set("residual", copyArray("Float64Array", ax.residual.data(), ax.residual.size()));
+    out.set("nodes", nodes);
+    const std::size_t nb = s.beams.beams.size();
+    std::vector<std::uint32_t> ends(2 * nb);
+    std::vector<std::int32_t> faces(2 * nb);
+    std::vector<double> quads(12 * nb), planes(4 * nb), heights(2 * nb), planarity(nb), twist(nb);
+    for (std::size_t i = 0; i < nb; ++i) {
+      const phex::MeshEdge& e = ax.edges[i];
+      const phex::Beam& b = s.beams.beams[i];
+      ends[2 * i] = e.a, ends[2 * i + 1] = e.b, faces[2 * i] = e.left, faces[2 * i + 1] = e.right;
+      for (int k = 0; k < 4; ++k)
+        for (int c = 0; c < 3; ++c) quads[12 * i + 3 * k + c] = b.corners[k][c];
+      for (int c = 0; c < 3; ++c) planes[4 * i + c] = b.normal[c];
+      planes[4 * i + 3] = b.planeOffset;
+      heights[2 * i] = b.heightA, heights[2 * i + 1] = b.heightB, planarity[i] = b.planarity, twist[i] = b.twistDeg;
+    }
+    val beams = val::object();
+    beams.set("nodes", copyArray("Uint32Array", ends.data(), ends.size()));
+    beams.set("faces", copyArray("Int32Array", faces.data(), faces.size()));
+    beams.set("quads", copyArray("Float64Array", quads.data(), quads.size()));
+    beams.set("planes", copyArray("Float64Array", planes.data(), planes.size()));
+    beams.set("heights", copyArray("Float64Array", heights.data(), heights.size()));
+    beams.set("planarity", copyArray("Float64Array", planarity.data(), planarity.size()));
+    beams.set("twist", copyArray("Float64Array", twist.data(), twist.size()));
+    out.set("beams", beams);
+    val solid = val::object();
+    val origin = val::array();
+    for (int k = 0; k < 3; ++k) origin.call<void>("push", s.model.origin(k));
+    solid.set("origin", origin);
+    solid.set("panels", solidToJs(s.model.panels));
+    solid.set("beams", solidToJs(s.model.beams));
+    const std::vector<float> axes(s.model.axes.data(), s.model.axes.data() + s.model.axes.size());
+    val axesOut = val::object();
+    axesOut.set("positions", copyArray("Float32Array", axes.data(), axes.size()));
+    solid.set("axes", axesOut);
+    out.set("solid", solid);
+    val report = val::object();
+    val kinds = val::object();
+    int withPanels = 0;
+    for (phex::NodeKind k : {phex::NodeKind::Cone, phex::NodeKind::Boundary, phex::NodeKind::Corner, phex::NodeKind::BestFit,
+                             phex::NodeKind::Folded, phex::NodeKind::Free}) {
+      const int count = static_cast<int>(std::count(ax.kind.begin(), ax.kind.end(), k));
+      kinds.set(phex::nodeKindName(k), count);
+      if (k != phex::NodeKind::Free) withPanels += count;
+    }
+    report.set("nodesByKind", kinds);
+    report.set("offset", o.offset ? val(*o.offset) : val::null());
+    val range = val::array();
+    range.call<void>("push", ax.offsetMin);
+    range.call<void>("push", ax.offsetMax);
+    report.set("offsetRange", range);
+    for (const auto& [name, value] : std::initializer_list<std::pair<const char*, double>>{
+             {"nodeCount", withPanels}, {"beamCount", static_cast<double>(nb)}, {"beamLength", s.beams.length},
+             {"beamHeight", s.beams.height}, {"beamWidth", s.beamWidth}, {"panelThickness", s.panelThickness},
+             {"boundaryBeams", ax.boundaryBeams}, {"boundaryBeamsPlanar", ax.boundaryBeamsPlanar},
+             {"boundaryRuns", ax.boundaryRuns}, {"boundaryRunsPlanar", ax.boundaryRunsPlanar},
+             {"boundaryTwistMaxDeg", ax.boundaryTwistMaxDeg}, {"boundaryTurnMaxDeg", ax.boundaryTurnMaxDeg},
+             {"beamPlanarityMax", s.beams.planarityMax}, {"interiorBeamPlanarityMax", s.beams.interiorPlanarityMax},
+             {"nodesMovedOntoPlanesMax", ax.snapMax}})
+      report.set(name, value);
+    val notes = val::array();
+    for (const auto* list : {&ax.notes, &s.notes})
+      for (const std::string& n : *list) notes.call<void>("push", n);
+    report.set("notes", notes);
+    out.set("report", report);
     return out;
   });
 }
@@ -434,6 +565,7 @@ EMSCRIPTEN_BINDINGS(phex) {
   emscripten::function("capabilities", &capabilities);
   emscripten::function("surfacePreview", &surfacePreview);
   emscripten::function("fabrication", &fabrication);
+  emscripten::function("structure", &structure);
   emscripten::function("mallocedBytes", &mallocedBytes);
   emscripten::function("clearUploadCache", &clearUploadCache);
   emscripten::function("debugTrap", &debugTrap);

@@ -1,8 +1,9 @@
 // phex web app: designs P-Hex meshes with the phex library (in a worker) and shows them with three.js.
-import { createPHex, MESH_FORMATS, meshToOBJ, meshToPLY, PARAMETERS } from 'phex';
+import * as THREE from 'three';
+import { createPHex, MESH_FORMATS, meshToOBJ, meshToPLY, PARAMETERS, STRUCTURE_OPTIONS, triangulateFaces } from 'phex';
 import { CURVATURE_MODES, curvatureColoring, FACE_MODES, faceColoring, faceQuantities, fmt } from './coloring.js';
 import { PRESETS } from './presets.js';
-import { Viewer } from './viewer.js';
+import { structureGroup, Viewer } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
 // Edits within this delay coalesce (typing a number); short enough that a finished 2k-face edit is on screen
@@ -22,6 +23,7 @@ let capabilities;
 let upload = null; // {bytes, name, format} of an uploaded mesh in place of the analytic surface
 let last = null; // {result, params, quantities: {hex, initial}}
 let preview = null; // {key, data} of the curvature preview
+let structure = null; // {result, key, data} of the structure view: phex.structure of the shown mesh
 let running = null; // AbortController of the run in flight
 let rerunTimer = 0;
 let runs = 0;
@@ -194,7 +196,7 @@ function designFromUrl() {
 
 function colorOptions() {
   const view = $('view').value;
-  const modes = view === 'curvature' ? CURVATURE_MODES : view === 'triangulation' ? { none: 'Plain' } : FACE_MODES;
+  const modes = view === 'curvature' ? CURVATURE_MODES : view === 'triangulation' || view === 'structure' ? { none: 'Plain' } : FACE_MODES;
   const current = $('color').value;
   if (Object.keys(modes).join() !== [...$('color').options].map((o) => o.value).join()) {
     $('color').replaceChildren(...Object.entries(modes).map(([value, label]) => new Option(label, value)));
@@ -231,6 +233,12 @@ async function draw({ refit = false } = {}) {
   } else if (view === 'triangulation') {
     viewer.showTriangles(last.result.triangulation, null, shading());
     showLegend(null);
+  } else if (view === 'structure') {
+    showLegend(null);
+    const data = await structureOf();
+    if (!data || $('view').value !== 'structure') return;
+    viewer.clear();
+    viewer.showStructure(data.solid);
   } else if (view === 'curvature') {
     const data = await curvaturePreview();
     if (!data || $('view').value !== 'curvature') return;
@@ -254,6 +262,46 @@ async function curvaturePreview() {
     }
   }
   return preview.data;
+}
+
+/** The structure options of the form: empty fields take the library's defaults; anything else goes to it to be named. */
+function structureOptions() {
+  const options = {};
+  for (const { name } of STRUCTURE_OPTIONS) {
+    const text = $(name).value.trim();
+    if (text !== '') options[name] = Number(text);
+  }
+  return options;
+}
+
+/** phex.structure of the shown mesh with the form's options, kept while neither changes; null after an error (shown). */
+async function structureOf() {
+  const options = structureOptions();
+  const key = JSON.stringify(options);
+  if (structure?.result !== last.result || structure.key !== key) {
+    try {
+      structure = { result: last.result, key, data: await phex.structure(last.result.hex, options) };
+    } catch (error) {
+      structure = null;
+      showError(`Structure: ${error.message}`);
+      $('structure-info').textContent = '–';
+      return null;
+    }
+    clearError();
+    showStructureInfo(structure.data.report);
+  }
+  return structure.data;
+}
+
+/** The structure's summary under the statistics: nodes, beams, the boundary rule's reach and the offset range. */
+function showStructureInfo(report) {
+  const k = report.nodesByKind;
+  const named = k['best-fit'] + k.folded;
+  const [lo, hi] = report.offsetRange.map((d) => (Number.isFinite(d) ? d.toPrecision(2) : d > 0 ? '∞' : '−∞'));
+  $('structure-info').textContent = `${report.nodeCount} nodes${named ? ` (${k['best-fit']} best fit, ${k.folded} folded)` : ''} · ${
+    report.beamCount} beams, ${report.beamLength.toPrecision(4)} long${
+    report.boundaryBeams ? ` · boundary ${report.boundaryBeamsPlanar}/${report.boundaryBeams} planar` : ''} · offsets ${lo} … ${hi}`;
+  $('structure-info').title = report.notes.join('\n');
 }
 
 // Notes that tell a designer the result falls short, or why the method chose what it did against the form:
@@ -532,8 +580,52 @@ const EXPORTS = {
   'export-png': () => download(viewer.snapshot(), `${baseName()}.png`, 'image/png'),
   'export-panels': async () => download(await phex.panels(last.result.hex), `${baseName()}-panels.svg`, 'image/svg+xml'),
   'export-schedule': async () => download(await phex.panels(last.result.hex, { format: 'csv' }), `${baseName()}-panels.csv`, 'text/csv'),
-  'export-beams': async () => download(await phex.beams(last.result.hex), `${baseName()}-beams.csv`, 'text/csv'),
+  // In the structure view the beam schedule carries the structure's beams (heights, plane, corners) too.
+  'export-beams': async () => {
+    const shown = $('view').value === 'structure' ? await structureOf() : null;
+    const options = shown ? { ...structureOptions(), beamHeight: shown.report.beamHeight } : {};
+    download(await phex.beams(last.result.hex, options), `${baseName()}-beams.csv`, 'text/csv');
+  },
+  'export-structure-gltf': async () => {
+    const data = await structureOf();
+    if (!data) return;
+    const { GLTFExporter } = await import('three/addons/exporters/GLTFExporter.js');
+    const glb = await new GLTFExporter().parseAsync(structureGroup(data.solid), { binary: true });
+    download(glb, `${baseName()}-structure.glb`, 'model/gltf-binary');
+  },
+  'export-structure-obj': async () => download(await phex.structureOBJ(last.result.hex, structureOptions()), `${baseName()}-structure.obj`, 'text/plain'),
+  'export-nodes': async () => download(await phex.nodes(last.result.hex), `${baseName()}-nodes.csv`, 'text/csv'),
+  'export-offset-obj': async () => {
+    const offset = await offsetLayer();
+    if (offset) download(meshToOBJ(offset), `${baseName()}-offset.obj`, 'text/plain');
+  },
+  'export-offset-ply': async () => {
+    const offset = await offsetLayer();
+    if (offset) download(meshToPLY(offset), `${baseName()}-offset.ply`, 'text/plain');
+  },
+  'export-offset-gltf': async () => {
+    const offset = await offsetLayer();
+    if (!offset) return;
+    const { positions, index } = triangulateFaces(offset);
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+    geometry.setIndex(new THREE.BufferAttribute(index, 1));
+    const mesh = new THREE.Mesh(geometry, new THREE.MeshStandardMaterial({ color: 0x9cc7e6 }));
+    mesh.name = 'offset';
+    const { GLTFExporter } = await import('three/addons/exporters/GLTFExporter.js');
+    download(await new GLTFExporter().parseAsync(mesh, { binary: true }), `${baseName()}-offset.glb`, 'model/gltf-binary');
+  },
 };
+
+/** The offset layer at the form's offset distance (the structure view's Offset field), or null with the reason shown. */
+async function offsetLayer() {
+  const { offset } = structureOptions();
+  if (offset === undefined) {
+    showError('Offset: enter the face distance of the offset layer in the Offset field (View: structure).');
+    return null;
+  }
+  return (await phex.structure(last.result.hex, { offset })).offset;
+}
 
 // ---------------------------------------------------------------- start
 
@@ -586,7 +678,15 @@ async function start() {
     compute();
   });
   $('cancel').addEventListener('click', () => running?.abort());
-  $('view').addEventListener('change', () => draw().then(() => last && history.replaceState(null, '', upload ? location.hash : designToHash(last.params))));
+  $('view').addEventListener('change', () => {
+    $('structure-params').hidden = $('view').value !== 'structure';
+    draw().then(() => last && history.replaceState(null, '', upload ? location.hash : designToHash(last.params)));
+  });
+  let structureTimer = 0;
+  $('structure-params').addEventListener('input', () => {
+    clearTimeout(structureTimer);
+    structureTimer = setTimeout(() => draw(), RERUN_DELAY_MS);
+  });
   $('color').addEventListener('change', () => draw().then(() => last && history.replaceState(null, '', upload ? location.hash : designToHash(last.params))));
   $('wireframe').addEventListener('change', () => viewer.setShading(shading()));
   $('flat').addEventListener('change', () => draw());
@@ -616,6 +716,8 @@ async function start() {
   });
   addEventListener('error', (event) => showError(String(event.message)));
   addEventListener('unhandledrejection', (event) => showError(String(event.reason?.message ?? event.reason)));
+  $('structure-params').hidden = $('view').value !== 'structure';
+  for (const spec of STRUCTURE_OPTIONS) $(spec.name).title = spec.description;
   setUpDrop();
   setUpHover();
 

@@ -224,6 +224,16 @@ export class Viewer {
     return hit ? this.#faces.faceOfTriangle[hit.faceIndex] : -1;
   }
 
+  /**
+   * Shows the structure on the panels (phex.structure's `solid`): glass panels with their thickness, the beams
+   * and the node axes.
+   */
+  showStructure(solid) {
+    const group = structureGroup(solid);
+    for (const child of [...group.children]) this.#group.add(child);
+    this.requestRender();
+  }
+
   /** The object to export as glTF. */
   exportable() {
     return this.#group;
@@ -234,6 +244,47 @@ export class Viewer {
     this.render();
     return this.canvas.toDataURL('image/png');
   }
+}
+
+const PANEL_COLOR = 0x9cc7e6;
+const BEAM_COLOR = 0x5a6270;
+const AXIS_COLOR = 0xc0392b;
+
+/**
+ * The structure's solids as three.js objects named panels, beams and axes, each placed at the solid's origin (its
+ * positions are relative to it, single precision), with the counts in userData (glTF extras on export: the
+ * beams' object carries {beams: count}, beam k being its triangles 12k .. 12k + 11).
+ */
+export function structureGroup(solid) {
+  const group = new THREE.Group();
+  const part = (name, { positions, index, count }, material) => {
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+    geometry.setIndex(new THREE.BufferAttribute(index, 1));
+    geometry.computeVertexNormals();
+    const mesh = new THREE.Mesh(geometry, material);
+    mesh.name = name;
+    mesh.userData = { [name]: count };
+    return mesh;
+  };
+  const axes = new THREE.BufferGeometry();
+  axes.setAttribute('position', new THREE.BufferAttribute(solid.axes.positions, 3));
+  const lines = new THREE.LineSegments(axes, lineMaterial(AXIS_COLOR));
+  lines.name = 'axes';
+  lines.userData = { axes: solid.axes.positions.length / 6 };
+  group.add(part('panels', solid.panels, solidMaterial('panels')), part('beams', solid.beams, solidMaterial('beams')), lines);
+  for (const child of group.children) child.position.set(...solid.origin);
+  return group;
+}
+
+function solidMaterial(kind) {
+  const key = `solid-${kind}`;
+  if (!materials.has(key)) {
+    materials.set(key, kind === 'panels'
+      ? new THREE.MeshLambertMaterial({ color: PANEL_COLOR, transparent: true, opacity: 0.55, side: THREE.DoubleSide, depthWrite: false })
+      : new THREE.MeshLambertMaterial({ color: BEAM_COLOR }));
+  }
+  return materials.get(key);
 }
 
 /**

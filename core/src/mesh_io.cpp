@@ -183,7 +183,7 @@ class PolygonTriangulator {
  public:
   // Appends the triangles of polygon `ids` (vertex ids into xyz, 3 per vertex) to `tri`; false (and nothing
   // appended) where its ears took more than kPolygonTestsPerCorner point tests per corner.
-  bool add(const std::vector<int>& ids, const std::vector<double>& xyz, std::vector<int>& tri) {
+  bool add(const std::vector<int>& ids, const double* xyz, std::vector<int>& tri) {
     const int n = static_cast<int>(ids.size());
     if (n == 3) {
       tri.insert(tri.end(), ids.begin(), ids.end());
@@ -377,6 +377,15 @@ class PolygonTriangulator {
   long long tests_ = 0;
 };
 
+}  // namespace
+
+bool triangulatePolygon(const std::vector<int>& ids, const double* xyz, std::vector<int>& tri) {
+  thread_local PolygonTriangulator triangulator;  // its buffers kept from one polygon to the next
+  return triangulator.add(ids, xyz, tri);
+}
+
+namespace {
+
 std::string convolutedPolygon(std::size_t corners) {
   return std::to_string(corners) + " corners: too convoluted to triangulate (its ears took more than " +
          std::to_string(kPolygonTestsPerCorner) + " point tests per corner): split it into smaller polygons";
@@ -426,10 +435,10 @@ RawMesh readObj(const std::uint8_t* data, std::size_t size, const std::string& n
     failAt(name, "line " + std::to_string(forwardLine), "vertex index " + std::to_string(forwardIndex) +
                    " is out of range (the file has " + std::to_string(mesh.vertexCount()) + " vertices)");
   std::vector<int> ids;
-  PolygonTriangulator polygons;
   for (std::size_t f = 0; f + 1 < offsets.size(); ++f) {
     ids.assign(polygonIds.begin() + offsets[f], polygonIds.begin() + offsets[f + 1]);
-    if (!polygons.add(ids, mesh.xyz, mesh.tri)) failAt(name, "line " + std::to_string(polygonLine[f]), "a face of " + convolutedPolygon(ids.size()));
+    if (!triangulatePolygon(ids, mesh.xyz.data(), mesh.tri))
+      failAt(name, "line " + std::to_string(polygonLine[f]), "a face of " + convolutedPolygon(ids.size()));
   }
   return mesh;
 }
@@ -461,7 +470,6 @@ RawMesh readOff(const std::uint8_t* data, std::size_t size, const std::string& n
     in.skipLine();
   }
   std::vector<int> ids;
-  PolygonTriangulator polygons;
   for (long long f = 0; f < nf; ++f) {
     std::string_view c;
     if (!in.token(c)) in.fail("file ends after " + std::to_string(f) + " of the " + std::to_string(nf) + " faces declared");
@@ -476,7 +484,7 @@ RawMesh readOff(const std::uint8_t* data, std::size_t size, const std::string& n
                 std::to_string(nv) + " vertices, counted from 0)");
       ids.push_back(static_cast<int>(i));
     }
-    if (!polygons.add(ids, mesh.xyz, mesh.tri)) in.fail("face " + std::to_string(f) + " of " + convolutedPolygon(ids.size()));
+    if (!triangulatePolygon(ids, mesh.xyz.data(), mesh.tri)) in.fail("face " + std::to_string(f) + " of " + convolutedPolygon(ids.size()));
     checkTriangleLimit(name, mesh.tri.size() / 3);
     in.skipLine();
   }
@@ -714,7 +722,6 @@ RawMesh readPly(const std::uint8_t* data, std::size_t size, const std::string& n
       sawFace = true;
     }
     std::vector<int> ids;
-    PolygonTriangulator polygons;
     for (std::uint64_t i = 0; i < e.count; ++i) {
       body.at(e.name, i);
       for (int k = 0; k < static_cast<int>(e.properties.size()); ++k) {
@@ -749,7 +756,7 @@ RawMesh readPly(const std::uint8_t* data, std::size_t size, const std::string& n
           ids.push_back(static_cast<int>(x));
         }
         if (keep) {
-          if (!polygons.add(ids, mesh.xyz, mesh.tri)) body.fail(body.where() + " of " + convolutedPolygon(ids.size()));
+          if (!triangulatePolygon(ids, mesh.xyz.data(), mesh.tri)) body.fail(body.where() + " of " + convolutedPolygon(ids.size()));
           checkTriangleLimit(name, mesh.tri.size() / 3);
         }
       }

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <map>
 #include <string>
 #include <utility>
 
@@ -17,14 +16,8 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-std::string label(int face) { return "P" + std::to_string(face + 1); }
-
-// Ten significant digits: a 100 m facade to a hundredth of a millimetre.
-std::string num(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.10g", x == 0 ? 0.0 : x);  // no "-0"
-  return buf;
-}
+std::string label(int face) { return panelLabel(face); }
+std::string num(double x) { return formatNumber(x); }
 
 // The area centroid of a simple polygon (the mean corner where the area vanishes).
 Vec2 areaCentroid(const std::vector<Vec2>& p) {
@@ -63,28 +56,79 @@ double meanEdge(const std::vector<Panel>& panels) {
 
 }  // namespace
 
-std::vector<Panel> flattenPanels(const PolyMesh& mesh) {
+std::string panelLabel(int face) { return "P" + std::to_string(face + 1); }
+
+std::string formatNumber(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.10g", x == 0 ? 0.0 : x);  // no "-0"
+  return buf;
+}
+
+void checkPolyMesh(const PolyMesh& mesh, const std::string& who) {
   const int nf = mesh.faceCount(), nv = static_cast<int>(mesh.V.rows());
-  if (nf <= 0) throw Error(ErrorCode::InvalidInput, "panels: the mesh has no faces");
+  if (nf <= 0) throw Error(ErrorCode::InvalidInput, who + ": the mesh has no faces");
   if (mesh.offsets.front() != 0 || static_cast<std::size_t>(mesh.offsets.back()) != mesh.indices.size())
-    throw Error(ErrorCode::InvalidInput, "panels: the face offsets do not span the face indices");
+    throw Error(ErrorCode::InvalidInput, who + ": the face offsets do not span the face indices");
   if (!mesh.V.allFinite()) {
     for (int v = 0; v < nv; ++v)
       if (!mesh.V.row(v).allFinite())
-        throw Error(ErrorCode::InvalidInput, "panels: vertex " + std::to_string(v) + " has a coordinate that is not finite");
+        throw Error(ErrorCode::InvalidInput, who + ": vertex " + std::to_string(v) + " has a coordinate that is not finite");
   }
-  std::vector<Panel> panels(nf);
   for (int f = 0; f < nf; ++f) {
-    const std::string name = "panels: face " + std::to_string(f) + " (" + label(f) + ")";
+    auto name = [&] { return who + ": face " + std::to_string(f) + " (" + label(f) + ")"; };  // on error only
     if (mesh.offsets[f + 1] < mesh.offsets[f] || static_cast<std::size_t>(mesh.offsets[f + 1]) > mesh.indices.size())
-      throw Error(ErrorCode::InvalidInput, name + ": its offsets " + std::to_string(mesh.offsets[f]) + ".." +
+      throw Error(ErrorCode::InvalidInput, name() + ": its offsets " + std::to_string(mesh.offsets[f]) + ".." +
                                                std::to_string(mesh.offsets[f + 1]) + " do not lie within the face indices");
     const int n = mesh.offsets[f + 1] - mesh.offsets[f];
-    if (n < 3) throw Error(ErrorCode::InvalidInput, name + " has " + std::to_string(std::max(n, 0)) + " corners; a panel needs 3 or more");
+    if (n < 3) throw Error(ErrorCode::InvalidInput, name() + " has " + std::to_string(std::max(n, 0)) + " corners; a panel needs 3 or more");
     const int* ids = mesh.face(f);
     for (int k = 0; k < n; ++k)
       if (ids[k] < 0 || ids[k] >= nv)
-        throw Error(ErrorCode::InvalidInput, name + " names vertex " + std::to_string(ids[k]) + ", outside 0.." + std::to_string(nv - 1));
+        throw Error(ErrorCode::InvalidInput, name() + " names vertex " + std::to_string(ids[k]) + ", outside 0.." + std::to_string(nv - 1));
+  }
+}
+
+std::vector<MeshEdge> meshEdges(const PolyMesh& mesh, const std::string& who) {
+  std::vector<MeshEdge> edges;
+  edges.reserve(mesh.indices.size() / 2 + 8);
+  // The edges at each node as a linked list under its smaller end: a node has few, so a lookup is a short walk.
+  std::vector<int> head(mesh.V.rows(), -1), next;
+  next.reserve(edges.capacity());
+  for (int f = 0; f < mesh.faceCount(); ++f) {
+    const int n = mesh.faceSize(f);
+    const int* ids = mesh.face(f);
+    for (int k = 0; k < n; ++k) {
+      const int a = ids[k], b = ids[(k + 1) % n];
+      int e = head[std::min(a, b)];
+      while (e >= 0 && std::max(edges[e].a, edges[e].b) != std::max(a, b)) e = next[e];
+      if (e < 0) {
+        next.push_back(head[std::min(a, b)]);
+        head[std::min(a, b)] = static_cast<int>(edges.size());
+        edges.push_back({a, b, f, -1});
+        continue;
+      }
+      MeshEdge& edge = edges[e];
+      auto name = [&] { return who + ": the edge between vertices " + std::to_string(a) + " and " + std::to_string(b); };
+      if (edge.right >= 0)
+        throw Error(ErrorCode::InvalidInput, name() + " is shared by more than two faces (" + label(edge.left) + ", " +
+                                                 label(edge.right) + ", " + label(f) + ")");
+      if (edge.a == a)
+        throw Error(ErrorCode::InvalidInput, name() + " runs the same way in " + label(edge.left) + " and " + label(f) +
+                                                 " (faces not consistently oriented)");
+      edge.right = f;
+    }
+  }
+  return edges;
+}
+
+std::vector<Panel> flattenPanels(const PolyMesh& mesh) {
+  checkPolyMesh(mesh, "panels");
+  const int nf = mesh.faceCount();
+  std::vector<Panel> panels(nf);
+  for (int f = 0; f < nf; ++f) {
+    const std::string name = "panels: face " + std::to_string(f) + " (" + label(f) + ")";
+    const int n = mesh.faceSize(f);
+    const int* ids = mesh.face(f);
     Panel& p = panels[f];
     p.face = f;
     const FacePlane plane = leastSquaresPlane(mesh, f);
@@ -226,36 +270,10 @@ std::string panelsCsv(const std::vector<Panel>& panels) {
 
 std::string beamsCsv(const PolyMesh& mesh) {
   const std::vector<Panel> panels = flattenPanels(mesh);  // checks the mesh; gives each face's plane
-  struct Beam {
-    int a, b;             // nodes, in the direction the left face runs the edge
-    int left, right = -1;
-  };
-  std::vector<Beam> beams;
-  std::map<std::pair<int, int>, int> index;  // (min node, max node) -> beam
-  for (int f = 0; f < mesh.faceCount(); ++f) {
-    const int n = mesh.faceSize(f);
-    const int* ids = mesh.face(f);
-    for (int k = 0; k < n; ++k) {
-      const int a = ids[k], b = ids[(k + 1) % n];
-      const auto [it, added] = index.emplace(std::minmax(a, b), static_cast<int>(beams.size()));
-      if (added) {
-        beams.push_back({a, b, f});
-        continue;
-      }
-      Beam& beam = beams[it->second];
-      const std::string name = "panels: the edge between vertices " + std::to_string(a) + " and " + std::to_string(b);
-      if (beam.right >= 0)
-        throw Error(ErrorCode::InvalidInput, name + " is shared by more than two faces (" + label(beam.left) + ", " +
-                                                 label(beam.right) + ", " + label(f) + ")");
-      if (beam.a == a)
-        throw Error(ErrorCode::InvalidInput, name + " runs the same way in " + label(beam.left) + " and " + label(f) +
-                                                 " (faces not consistently oriented)");
-      beam.right = f;
-    }
-  }
+  const std::vector<MeshEdge> beams = meshEdges(mesh);
   std::string s = "beam,node_a,node_b,length,panel_left,panel_right,fold_deg,ax,ay,az,bx,by,bz\n";
   for (std::size_t i = 0; i < beams.size(); ++i) {
-    const Beam& beam = beams[i];
+    const MeshEdge& beam = beams[i];
     const Vec3 a = mesh.vertex(beam.a), b = mesh.vertex(beam.b);
     std::string fold;
     if (beam.right >= 0) {

@@ -5,6 +5,9 @@
 #include <phex/pipeline.hpp>
 #include <phex/panels.hpp>
 #include <phex/parallel.hpp>
+#include <phex/structure.hpp>
+
+#include "gltf.hpp"
 
 #include <algorithm>
 #include <sys/resource.h>
@@ -15,6 +18,7 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <numeric>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -92,6 +96,23 @@ Options of `phex run`:
                             (default none: viewers fit it to the window)
   --beams FILE.csv          write the beam schedule: one row per edge with its nodes, length, the
                             panels either side and the fold between them (degrees, + ridge, - valley)
+  --offset D                the offset of the P-Hex mesh at face distance D (either side, not 0; > 0
+                            towards the normals): every face plane moved by D, each node along its axis
+  --offset-mesh FILE        write that offset: .obj or .ply (its vertices and faces in the P-Hex mesh's
+                            order, so the two files pair up line by line) or .glb / .gltf
+  --beam-height H           height of the beams behind the panels (face distance; > 0, default a fifth
+                            of the mean edge): one planar quad per edge, between the mesh and its offset
+                            at -H; with --beams the schedule gains each beam's heights, plane, planarity,
+                            twist and quad corners
+  --beam-width W            width of the beams in the solid model (> 0, default a quarter of H)
+  --panel-thickness T       thickness of the panels in the solid model (> 0, default a fiftieth of the
+                            mean edge)
+  --structure FILE          write the structure as a solid model: panels with their thickness and beams
+                            with their height and width, .glb / .gltf (meshes panels, beams, axes) or
+                            .obj (an object per panel P<n> and per beam B<k>)
+  --nodes FILE.csv          write the node schedule: position, axis, the panels at the node and the
+                            angles between axis and panels; nodes of four or more panels and folded ones
+                            named (see the report's structure notes)
   --triangulation FILE.obj  write the triangulation as OBJ
   --initial FILE.obj        write the mesh before optimization as OBJ
   --report FILE.json        write counts, planarity, iterations and timings as JSON
@@ -263,9 +284,46 @@ phex::Vec3 parseVector(const std::string& opt, const std::string& text) {
   return v;
 }
 
+// The file type of `path` by its extension, lower case ("" without one).
+std::string extensionOf(const std::string& path) {
+  const auto dot = path.find_last_of('.');
+  std::string ext = dot == std::string::npos ? "" : path.substr(dot + 1);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+json optionalNumber(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
+
+// The structure's part of the report: nodes by kind, the nodes named, the boundary rule, ranges and measures.
+json structureJson(const phex::Structure& s, const phex::StructureOptions& o, double milliseconds) {
+  const phex::NodeAxes& ax = s.axes;
+  json kinds = json::object();
+  for (phex::NodeKind k : {phex::NodeKind::Cone, phex::NodeKind::Boundary, phex::NodeKind::Corner, phex::NodeKind::BestFit,
+                           phex::NodeKind::Folded, phex::NodeKind::Free})
+    kinds[phex::nodeKindName(k)] = std::count(ax.kind.begin(), ax.kind.end(), k);
+  auto ids = [](const std::vector<int>& nodes) {
+    json list = json::array();
+    for (int v : nodes) list.push_back(v + 1);
+    return list;
+  };
+  json notes = ax.notes;
+  for (const std::string& n : s.notes) notes.push_back(n);
+  return {{"nodes", kinds}, {"bestFitNodes", ids(ax.bestFit)}, {"foldedNodes", ids(ax.folded)},
+          {"boundaryBeams", ax.boundaryBeams}, {"boundaryBeamsPlanar", ax.boundaryBeamsPlanar},
+          {"boundaryRuns", ax.boundaryRuns}, {"boundaryRunsPlanar", ax.boundaryRunsPlanar},
+          {"boundaryTwistMaxDeg", ax.boundaryTwistMaxDeg}, {"boundaryTurnMaxDeg", ax.boundaryTurnMaxDeg},
+          {"offsetRange", {optionalNumber(ax.offsetMin), optionalNumber(ax.offsetMax)}},
+          {"offset", o.offset ? json(*o.offset) : json(nullptr)}, {"beamHeight", s.beams.height},
+          {"beamWidth", s.beamWidth}, {"panelThickness", s.panelThickness}, {"beams", s.beams.beams.size()},
+          {"beamLength", s.beams.length}, {"beamPlanarityMax", s.beams.planarityMax},
+          {"interiorBeamPlanarityMax", s.beams.interiorPlanarityMax}, {"nodesMovedOntoPlanesMax", ax.snapMax},
+          {"notes", notes}, {"milliseconds", milliseconds}};
+}
+
 int run(const std::vector<std::string>& args, bool triangulateOnly) {
   phex::PipelineParams p;
-  std::string out, tri, initial, reportPath, format, panels, beams;
+  std::string out, tri, initial, reportPath, format, panels, beams, offsetMesh, structure, nodes;
+  phex::StructureOptions structureOptions;
   phex::PanelSheetOptions sheet;
   bool quiet = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
@@ -301,6 +359,13 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--triangulation") tri = value();
     else if (a == "--panels") panels = value();
     else if (a == "--beams") beams = value();
+    else if (a == "--offset") structureOptions.offset = parseNumber(a, value());
+    else if (a == "--offset-mesh") offsetMesh = value();
+    else if (a == "--beam-height") structureOptions.beamHeight = parseNumber(a, value());
+    else if (a == "--beam-width") structureOptions.beamWidth = parseNumber(a, value());
+    else if (a == "--panel-thickness") structureOptions.panelThickness = parseNumber(a, value());
+    else if (a == "--structure") structure = value();
+    else if (a == "--nodes") nodes = value();
     else if (a == "--panel-gap") sheet.gap = parseNumber(a, value());
     else if (a == "--panel-width") sheet.width = parseNumber(a, value());
     else if (a == "--panel-unit") sheet.unit = value();
@@ -327,6 +392,17 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     usage("--panels writes .svg or .csv, got '" + panels + "'");
   if (!panels.empty() && triangulateOnly) usage("--panels needs phex run (a triangulation has no panels)");
   if (!beams.empty() && triangulateOnly) usage("--beams needs phex run");
+  const bool structureAsked = structureOptions.offset || structureOptions.beamHeight || structureOptions.beamWidth ||
+                              structureOptions.panelThickness || !offsetMesh.empty() || !structure.empty() || !nodes.empty();
+  if (structureAsked && triangulateOnly) usage("the structure options (--offset, --beam-height, --structure, --nodes, ...) need phex run");
+  if (!offsetMesh.empty() && !structureOptions.offset) usage("--offset-mesh needs --offset D (the face distance)");
+  if (structureOptions.offset && offsetMesh.empty()) usage("--offset needs --offset-mesh FILE to write the offset to");
+  const std::string offsetFormat = extensionOf(offsetMesh), structureFormat = extensionOf(structure);
+  if (!offsetMesh.empty() && offsetFormat != "obj" && offsetFormat != "ply" && offsetFormat != "glb" && offsetFormat != "gltf")
+    usage("--offset-mesh writes .obj, .ply, .glb or .gltf, got '" + offsetMesh + "'");
+  if (!structure.empty() && structureFormat != "glb" && structureFormat != "gltf" && structureFormat != "obj")
+    usage("--structure writes .glb, .gltf or .obj, got '" + structure + "'");
+  phex::validate(structureOptions);
   if (!(sheet.gap >= 0)) usage("--panel-gap must be 0 or more");
   if (!(sheet.width >= 0)) usage("--panel-width must be 0 or more");
   if (!sheet.unit.empty() && sheet.unit != "mm" && sheet.unit != "cm" && sheet.unit != "m" && sheet.unit != "in")
@@ -334,7 +410,7 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
   phex::validate(p);
   phex::threadCount();  // a malformed PHEX_THREADS fails here, before any output is opened
   // Fail on an unwritable output before computing anything.
-  for (const std::string* path : {&out, &tri, &initial, &reportPath, &panels, &beams})
+  for (const std::string* path : {&out, &tri, &initial, &reportPath, &panels, &beams, &offsetMesh, &structure, &nodes})
     if (!path->empty()) phex::writeTextFile(*path, "");
 
   phex::ProgressFn progress;
@@ -367,8 +443,48 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     const std::vector<phex::Panel> flat = phex::flattenPanels(r.hex);
     phex::writeTextFile(panels, panelFormat == "svg" ? phex::panelsSvg(flat, sheet) : phex::panelsCsv(flat));
   }
-  if (!beams.empty()) phex::writeTextFile(beams, phex::beamsCsv(r.hex));
-  const json rep = reportJson(p, r);
+  json rep = reportJson(p, r);
+  if (structureAsked) {
+    // The structure on the panels: axes, the offset, beams and the solid model (phex/structure.hpp).
+    const auto t0 = std::chrono::steady_clock::now();
+    const phex::Structure st = phex::buildStructure(r.hex, structureOptions);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (!offsetMesh.empty()) {
+      if (offsetFormat == "glb" || offsetFormat == "gltf")
+        phexcli::writeGltf(offsetMesh, {phexcli::polygonPart("offset", *st.offset, st.model.origin)}, st.model.origin,
+                           {{"faces", st.offset->faceCount()}});
+      else
+        phex::writeTextFile(offsetMesh, offsetFormat == "ply" ? phex::toPly(*st.offset) : phex::toObj(*st.offset));
+    }
+    if (!structure.empty()) {
+      if (structureFormat == "obj") {
+        phex::writeTextFile(structure, phex::toObj(st.model));
+      } else {
+        auto part = [](const std::string& name, const phex::SolidPart& solid, std::array<double, 4> color) {
+          phexcli::GltfPart g;
+          g.name = name, g.V = solid.V, g.color = color;
+          g.index.assign(solid.F.data(), solid.F.data() + solid.F.size());
+          return g;
+        };
+        phexcli::GltfPart axes;
+        axes.name = "axes", axes.V = st.model.axes, axes.lines = true, axes.color = {0.8, 0.1, 0.1, 1};
+        axes.index.resize(st.model.axes.rows());
+        std::iota(axes.index.begin(), axes.index.end(), 0u);
+        phexcli::writeGltf(structure,
+                           {part("panels", st.model.panels, {0.55, 0.75, 0.9, 0.6}), part("beams", st.model.beams, {0.35, 0.37, 0.4, 1}), axes},
+                           st.model.origin, {{"panels", st.model.panels.elements}, {"beams", st.model.beams.elements}, {"trianglesPerBeam", 12}});
+      }
+    }
+    if (!nodes.empty()) phex::writeTextFile(nodes, phex::nodesCsv(r.hex, st.axes));
+    if (!beams.empty())
+      phex::writeTextFile(beams, structureOptions.beamHeight ? phex::beamsCsv(r.hex, st.axes, st.beams) : phex::beamsCsv(r.hex));
+    rep["structure"] = structureJson(st, structureOptions, ms);
+    if (!quiet)
+      for (const auto* list : {&st.axes.notes, &st.notes})
+        for (const std::string& note : *list) std::cerr << "phex: structure: " << note << "\n";
+  } else if (!beams.empty()) {
+    phex::writeTextFile(beams, phex::beamsCsv(r.hex));
+  }
   if (!reportPath.empty()) phex::writeTextFile(reportPath, rep.dump(2) + "\n");
   std::cout << "faces " << r.metrics.faceCount << ", planarity max " << r.metrics.planarityMax << ", invalid faces "
             << r.metrics.selfIntersectingCount << ", iterations " << r.solve.iterations << ", " << r.totalMilliseconds

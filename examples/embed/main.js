@@ -109,7 +109,10 @@ async function update() {
     latest = result.hex;
     const { faceCount, planarityMax, facesBySize } = result.metrics;
     const { area, frame } = quantities(result.hex, edges);
-    $('quote').textContent = `${faceCount} flat panels (${facesBySize['6'] ?? 0} hexagons), ${area.toFixed(1)} m² of glass, ${Math.round(frame)} m of frame; flatness ${planarityMax.toExponential(1)}, computed in ${Math.round(result.timings.total)} ms`;
+    // The structure on the panels (beams 20 cm high behind them): its nodes are the connectors to make, three
+    // beams at each, and every beam is a flat plate.
+    const { report } = await phex.structure(result.hex, { beamHeight: 0.2 });
+    $('quote').textContent = `${faceCount} flat panels (${facesBySize['6'] ?? 0} hexagons), ${area.toFixed(1)} m² of glass, ${Math.round(frame)} m of frame; ${report.nodeCount} nodes, ${report.beamCount} flat beams (${Math.round(report.beamLength)} m); flatness ${planarityMax.toExponential(1)}, computed in ${Math.round(result.timings.total)} ms`;
     $('sheet').disabled = false;
     $('error').hidden = true;
     document.body.dataset.state = 'ready';

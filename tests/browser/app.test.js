@@ -240,6 +240,50 @@ test('views, colour modes and the face tooltip', async () => {
   assert.deepEqual(pageErrors, []);
 });
 
+test('the structure view draws panels, beams and node axes; its glTF export parses back with the beam count', async () => {
+  await page.selectOption('#view', 'structure');
+  await page.waitForFunction(() => /\d+ beams/.test(document.getElementById('structure-info').textContent), null, { timeout: RUN_TIMEOUT_MS });
+  assert.ok(await page.isVisible('#beamHeight'));
+  const info = await page.textContent('#structure-info');
+  const beams = Number(info.match(/(\d+) beams/)[1]);
+  const png = await page.locator('#viewport').screenshot();
+  await page.screenshot({ path: join(artifacts, 'structure.png') });
+  const { count, total } = await nonBackgroundPixels(png);
+  assert.ok(count > total * 0.02, `structure: only ${count} of ${total} pixels drawn`);
+  // The solid model as glTF: three's loader finds the beams, their count and 12 triangles each, panels and axes.
+  const glb = await downloadOf('#export-structure-gltf');
+  assert.match(glb.name, /-structure\.glb$/);
+  const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
+  const gltf = await new GLTFLoader().parseAsync(glb.data.buffer.slice(glb.data.byteOffset, glb.data.byteOffset + glb.data.byteLength), '');
+  const parts = {};
+  gltf.scene.traverse((o) => { if (o.geometry) parts[o.name] = o; });
+  assert.equal(parts.beams.userData.beams, beams);
+  assert.equal(parts.beams.geometry.index.count, 36 * beams);
+  assert.equal(parts.panels.userData.panels, Number(await page.textContent('#face-count')));
+  assert.ok(parts.axes.isLineSegments);
+  const nodes = (await downloadOf('#export-nodes')).data.toString('utf8').trimEnd().split('\n');
+  assert.match(nodes[0], /^node,kind,faces,x,y,z,axis_x/);
+  assert.equal(nodes.length - 1, Number(info.match(/(\d+) nodes/)[1]));
+  const schedule = (await downloadOf('#export-beams')).data.toString('utf8').trimEnd().split('\n');
+  assert.match(schedule[0], /,height_a,height_b,plane_nx,/);
+  assert.equal(schedule.length - 1, beams);
+  // The offset layer pairs up with the mesh line by line.
+  await page.fill('#offset', '0.01');
+  const offset = (await downloadOf('#export-offset-obj')).data.toString('utf8');
+  const hex = (await downloadOf('#export-obj')).data.toString('utf8');
+  assert.equal(offset.split('\n').filter((l) => l.startsWith('f ')).join(), hex.split('\n').filter((l) => l.startsWith('f ')).join());
+  assert.equal(offset.split('\n').filter((l) => l.startsWith('v ')).length, hex.split('\n').filter((l) => l.startsWith('v ')).length);
+  // A beam height the offset cannot take is named; the next value works.
+  await page.fill('#beamHeight', '1000');
+  await page.waitForFunction(() => /Structure: beamHeight = 1000/.test(document.getElementById('error').textContent), null, { timeout: RUN_TIMEOUT_MS });
+  await page.fill('#beamHeight', '0.01');
+  await page.waitForFunction(() => document.getElementById('error').hidden && /\d+ beams/.test(document.getElementById('structure-info').textContent), null, { timeout: RUN_TIMEOUT_MS });
+  await page.fill('#beamHeight', '');
+  await page.fill('#offset', '');
+  await page.selectOption('#view', 'hex');
+  assert.deepEqual(pageErrors, []);
+});
+
 /** A triangulated patch of a torus as OBJ text. */
 function torusPatchObj(n = 24) {
   const lines = [];
@@ -381,6 +425,10 @@ test('the embedding example computes a mesh and follows its sliders', async () =
     const first = await embed.textContent('#quote');
     assert.match(first, /flat panels/);
     assert.match(first, /[0-9.]+ m² of glass, \d+ m of frame/);
+    // The structure's quote: the nodes to connect and the beams, three at each node, as long as the frame.
+    const [, nodes, beams, length] = first.match(/(\d+) nodes, (\d+) flat beams \((\d+) m\)/).map(Number);
+    assert.ok(nodes > 0 && beams >= nodes, first);
+    assert.ok(Math.abs(length - Number(first.match(/(\d+) m of frame/)[1])) <= 1, first);
     const [sheet] = await Promise.all([embed.waitForEvent('download'), embed.click('#sheet')]);
     const svg = readFileSync(await sheet.path(), 'utf8');
     assert.equal((svg.match(/<polygon /g) ?? []).length, Number(first.match(/^(\d+) flat panels/)[1]));

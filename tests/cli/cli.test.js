@@ -120,6 +120,16 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--panels', join(dir, 'p.svg'), '--panel-unit', 'ft'], /--panel-unit must be mm, cm, m or in/],
     [['triangulate', '--panels', join(dir, 'p.svg')], /--panels needs phex run/],
     [['triangulate', '--beams', join(dir, 'b.csv')], /--beams needs phex run/],
+    [['run', '--offset', '0', '--offset-mesh', join(dir, 'o.obj')], /offset must be a finite number other than 0 \(got 0\)/],
+    [['run', '--offset', '0.1'], /--offset needs --offset-mesh/],
+    [['run', '--offset-mesh', join(dir, 'o.obj')], /--offset-mesh needs --offset D/],
+    [['run', '--offset', '0.1', '--offset-mesh', join(dir, 'o.stl')], /--offset-mesh writes \.obj, \.ply, \.glb or \.gltf/],
+    [['run', '--beam-height', '-0.1', '--structure', join(dir, 's.glb')], /beamHeight must be a positive number \(got -0\.1\)/],
+    [['run', '--beam-width', '0', '--structure', join(dir, 's.glb')], /beamWidth must be a positive number/],
+    [['run', '--panel-thickness', 'thin', '--structure', join(dir, 's.glb')], /--panel-thickness expects a number/],
+    [['run', '--structure', join(dir, 's.stl')], /--structure writes \.glb, \.gltf or \.obj/],
+    [['triangulate', '--nodes', join(dir, 'n.csv')], /structure options .* need phex run/],
+    [['run', '--surface', 'hyperboloid', '--faces', '300', '--beam-height', '50', '--structure', join(dir, 's.glb')], /beamHeight = 50 \(face distance -50\) is more than the offset can take: the edge between nodes \d+ and \d+ of panel P\d+( \(and P\d+\))? vanishes at face distance -[0-9.]+; face distances from -[0-9.]+ to [0-9.]+ can be taken/],
     [['run', '--threads', '-1'], /--threads must be 0 \(the default\) or more/],
     [['run', '--threads', 'all'], /--threads expects a number/],
   ];
@@ -154,6 +164,61 @@ test('run --panels writes the faces laid flat: an SVG cut sheet and a CSV schedu
   const boundary = edges.filter((c) => c[5] === '').length;
   assert.ok(boundary > 0);
   assert.equal(2 * edges.length - boundary, corners, 'each face edge counted once per side');
+});
+
+test('run --offset, --beam-height, --structure and --nodes write the structure on the panels', async () => {
+  const hex = join(dir, 's-hex.obj'), offset = join(dir, 's-offset.obj'), glb = join(dir, 's.glb'), nodes = join(dir, 's-nodes.csv');
+  const beams = join(dir, 's-beams.csv'), report = join(dir, 's.json');
+  const r = phex('run', '--surface', 'hyperboloid', '--faces', '600', '--out', hex, '--offset', '-0.05', '--offset-mesh', offset,
+    '--beam-height', '0.04', '--beam-width', '0.01', '--panel-thickness', '0.005', '--structure', glb, '--nodes', nodes,
+    '--beams', beams, '--report', report);
+  assert.equal(r.code, 0, r.err);
+  assert.match(r.err, /structure: boundary: \d+ of \d+ boundary beams planar/);
+  // The offset pairs up with the P-Hex mesh line by line: as many vertices, the same faces.
+  const [a, b] = [hex, offset].map((f) => readFileSync(f, 'utf8').trimEnd().split('\n').filter((l) => !l.startsWith('#')));
+  assert.equal(a.length, b.length);
+  assert.deepEqual(a.filter((l) => l.startsWith('f ')), b.filter((l) => l.startsWith('f ')));
+  const moved = a.filter((l, i) => l.startsWith('v ') && l !== b[i]).length;
+  assert.equal(moved, a.filter((l) => l.startsWith('v ')).length, 'every node moves');
+  const rep = JSON.parse(readFileSync(report, 'utf8'));
+  const s = rep.structure;
+  assert.equal(s.offset, -0.05);
+  assert.equal(s.beamHeight, 0.04);
+  assert.ok(s.nodes.cone > 0 && s.nodes.boundary > 0);
+  assert.equal(s.nodes['best-fit'] + s.nodes.folded, 0);
+  assert.equal(s.boundaryBeamsPlanar, s.boundaryBeams, 'the hyperboloid rims: every boundary beam planar');
+  assert.ok(s.beamPlanarityMax <= 1e-9);
+  assert.ok(s.offsetRange[0] < -0.05 && s.offsetRange[1] > 0.005, JSON.stringify(s.offsetRange));
+  // The node schedule: one row per node, three panels and three equal angles at a cone node.
+  const rows = readFileSync(nodes, 'utf8').trimEnd().split('\n').map((l) => l.split(','));
+  assert.equal(rows[0].join(), 'node,kind,faces,x,y,z,axis_x,axis_y,axis_z,scale,panels,axis_face_angles_deg,normal_deviation_deg,residual');
+  assert.equal(rows.length - 1, rep.mesh.vertices);
+  for (const row of rows.slice(1).filter((c) => c[1] === 'cone')) {
+    assert.equal(row[10].split(';').length, 3);
+    const angles = row[11].split(';').map(Number);
+    assert.ok(Math.max(...angles) - Math.min(...angles) < 1e-6, row.join());
+  }
+  // The beam schedule extended with heights, plane, planarity, twist and the quad's corners.
+  const beamRows = readFileSync(beams, 'utf8').trimEnd().split('\n').map((l) => l.split(','));
+  assert.match(beamRows[0].join(), /^beam,node_a,node_b,length,.*,height_a,height_b,plane_nx,plane_ny,plane_nz,plane_offset,planarity,twist_deg,q1x,.*,q4z$/);
+  assert.equal(beamRows.length - 1, s.beams);
+  for (const row of beamRows.slice(1)) assert.ok(Number(row[19]) <= 1e-9 && Number(row[13]) >= 0.04, row.join());
+  // The solid model as glTF: panels, beams (12 triangles each) and axes, the counts in the scene's extras.
+  const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
+  const data = readFileSync(glb);
+  const gltf = await new GLTFLoader().parseAsync(data.buffer.slice(data.byteOffset, data.byteOffset + data.byteLength), '');
+  const parts = {};
+  gltf.scene.traverse((o) => { if (o.geometry) parts[o.name] = o; });
+  assert.equal(gltf.scene.userData.beams, s.beams);
+  assert.equal(parts.beams.geometry.index.count, 3 * 12 * s.beams);
+  assert.equal(gltf.scene.userData.panels, rep.mesh.faces);
+  assert.ok(parts.axes.isLineSegments);
+  // And as OBJ: an object per panel and per beam.
+  const obj = join(dir, 's.obj');
+  assert.equal(phex('run', '--surface', 'hyperboloid', '--faces', '600', '--structure', obj, '--quiet').code, 0);
+  const objects = readFileSync(obj, 'utf8').split('\n').filter((l) => l.startsWith('o '));
+  assert.equal(objects.filter((l) => l.startsWith('o B')).length, s.beams);
+  assert.equal(objects.filter((l) => l.startsWith('o P')).length, rep.mesh.faces);
 });
 
 test('curvature of an uploaded mesh keeps the vertex order; bad files are named', () => {

@@ -1,6 +1,6 @@
 // phex — compiled by types.test.js with `tsc --noEmit --strict`: the typings must accept real use.
-import { createPHex, faceAreas, MESH_FORMATS, meshToOBJ, meshToPLY, PARAMETERS, PHexError, triangulateFaces } from '../../wasm/js/phex.js';
-import type { Capabilities, MemoryUse, Progress, Result, RunParams, SurfaceSpec } from '../../wasm/js/phex.js';
+import { createPHex, faceAreas, MESH_FORMATS, meshToOBJ, meshToPLY, PARAMETERS, PHexError, STRUCTURE_OPTIONS, triangulateFaces } from '../../wasm/js/phex.js';
+import type { Capabilities, MemoryUse, Progress, Result, RunParams, Structure, StructureOptions, SurfaceSpec } from '../../wasm/js/phex.js';
 
 async function main(): Promise<void> {
   const phex = await createPHex({ worker: false });
@@ -42,6 +42,19 @@ async function main(): Promise<void> {
       const cleared: void = await phex.clearUploadCache();
       console.log(reused, cleared);
     }
+    // The structure on the panels: solids for three.js, the offset, schedules.
+    const options: StructureOptions = { offset: 0.05, beamHeight: 0.1, beamWidth: null };
+    const structure: Structure = await phex.structure(result.hex, options);
+    const { origin, panels, beams, axes } = structure.solid;
+    const placed: [number, number, number] = origin;
+    const drawn: number = panels.positions.length + beams.index.length + axes.positions.length + panels.element.length;
+    const planarBoundary: number = structure.report.boundaryBeamsPlanar / Math.max(structure.report.boundaryBeams, 1);
+    const named: string[] = [...structure.nodes.bestFit, ...structure.nodes.folded].map((v) => `node ${v + 1}`);
+    const offsetVertices: number = structure.offset?.positions.length ?? 0;
+    const range: [number, number] = structure.report.offsetRange;
+    console.log(placed, drawn, planarBoundary, named, offsetVertices, range, structure.beams.quads.length, structure.nodes.kind[0]);
+    console.log((await phex.nodes(result.hex)).length, (await phex.beams(result.hex, { beamHeight: 0.1 })).length, (await phex.structureOBJ(result.hex)).length);
+    console.log(STRUCTURE_OPTIONS.map((o) => `${o.name}: ${o.description}`).join('\n'));
     const memory: MemoryUse = await phex.memory();
     console.log(memory.heapBytes, memory.usedBytes ?? 'unknown');
   } catch (error) {

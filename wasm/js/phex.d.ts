@@ -442,6 +442,147 @@ export interface PanelOptions {
   labels?: boolean;
 }
 
+/**
+ * Options of {@link PHex.structure} (and of the structure's schedules and OBJ): face distances in the mesh's units.
+ * Missing (or null) ones take their defaults; out of range (0, negative where not allowed, not finite, or farther
+ * than the offset can take before an edge vanishes) rejects with 'invalid_parameter' naming the option.
+ */
+export interface StructureOptions {
+  /** Face distance of the offset mesh (either side, not 0; > 0 towards the normals). Default: no offset mesh. */
+  offset?: number | null;
+  /** Height of the beams behind the panels (> 0): the face distance of their back layer. Default a fifth of the mean edge. */
+  beamHeight?: number | null;
+  /** Width of the beams in the solid model (> 0). Default a quarter of the beam height. */
+  beamWidth?: number | null;
+  /** Thickness of the panels in the solid model (> 0), towards the normal side. Default a fiftieth of the mean edge. */
+  panelThickness?: number | null;
+}
+
+/** One option of {@link StructureOptions}: its default (null: derived from the mesh) and meaning, for forms and tooltips. */
+export interface StructureOptionSpec {
+  name: keyof StructureOptions;
+  type: 'number';
+  default: null;
+  min?: number;
+  description: string;
+}
+export const STRUCTURE_OPTIONS: readonly StructureOptionSpec[];
+
+/**
+ * How a node's axis is found (the `kind` codes of {@link StructureNodes}): 0 cone (three panels: the axis of the
+ * cone of revolution touching their planes, exact), 1 boundary (two panels: the axis turned within their bisector
+ * plane by the boundary rule), 2 corner (one panel), 3 best fit (four or more panels, or three whose planes are
+ * parallel to one line: least squares), 4 folded (panels folded onto each other: the mean axis of the nodes around),
+ * 5 free (no panel).
+ */
+export type NodeKindCode = 0 | 1 | 2 | 3 | 4 | 5;
+
+/** The structure's nodes, in the mesh's vertex order. */
+export interface StructureNodes {
+  /** Each node where its panels' planes meet (moved from the mesh's vertex by about its planarity): 3 × node count. */
+  positions: Float64Array;
+  /**
+   * Each node's axis a, scaled so that n · a = 1 for each of its panels' unit normals n: the offset at face distance
+   * d puts the node at position + d a. |a| = 1 / sin(angle between axis and panels). 3 × node count.
+   */
+  axes: Float64Array;
+  /** How each axis was found ({@link NodeKindCode}). */
+  kind: Uint8Array;
+  /** Nodes of four or more panels (least-squares axes), ascending. */
+  bestFit: Uint32Array;
+  /** Nodes where panels fold onto each other (no usable axis), ascending. */
+  folded: Uint32Array;
+  /** Per node, the largest |n · a − 1| over its panels: 0 but at best-fit and folded nodes. */
+  residual: Float64Array;
+}
+
+/** One planar quad per edge of the mesh, in the beam schedule's order (beam B<k> is index k − 1). */
+export interface StructureBeams {
+  /** The edge's two nodes (0-based): 2 × beam count. */
+  nodes: Uint32Array;
+  /** The panels either side (0-based face ids; −1 at the boundary): 2 × beam count. */
+  faces: Int32Array;
+  /** The quad's corners: node a, node b, then b and a on the back layer (x, y, z each): 12 × beam count. */
+  quads: Float64Array;
+  /** The quad's plane: unit normal and offset (normal · x = offset): 4 × beam count. */
+  planes: Float64Array;
+  /** The back corners' distances from the edge, at a and at b: 2 × beam count. */
+  heights: Float64Array;
+  /** Largest corner distance from the quad's plane over its mean edge: 0 for a planar beam. */
+  planarity: Float64Array;
+  /** Angle in degrees between the planes through the edge and each end's axis: 0 for a planar beam. */
+  twist: Float64Array;
+}
+
+/** A solid part for a THREE.BufferGeometry: its positions relative to {@link StructureSolid.origin}. */
+export interface SolidPart {
+  /** Vertex coordinates in single precision, relative to the origin: 3 × vertex count. */
+  positions: Float32Array;
+  /** Vertex indices, three per triangle, turning outwards. */
+  index: Uint32Array;
+  /** For each triangle, the panel (face id) or beam (beam index) it belongs to. */
+  element: Uint32Array;
+  /** Panels or beams in the part. */
+  count: number;
+}
+
+/** The structure as solids, ready for three.js: place each object at `origin`. */
+export interface StructureSolid {
+  /** [x, y, z]: the mesh's box centre where that lies more than ten box diagonals from the origin (site coordinates), else zeros. */
+  origin: [number, number, number];
+  /** Each panel between its face plane and that plane shifted by panelThickness; sides in the bisector planes. */
+  panels: SolidPart;
+  /** Each beam's quad thickened by beamWidth across its plane (12 triangles per beam). */
+  beams: SolidPart;
+  /** Each node's axis from the beams' back layer to the panels' top, as line segments (pairs of points). */
+  axes: { positions: Float32Array };
+}
+
+/** What the core reports about a structure. */
+export interface StructureReport {
+  /** Nodes by how their axes were found. */
+  nodesByKind: { cone: number; boundary: number; corner: number; 'best-fit': number; folded: number; free: number };
+  /** Nodes with panels (the connectors to make). */
+  nodeCount: number;
+  beamCount: number;
+  /** Sum of the beams' lengths. */
+  beamLength: number;
+  /** The distances used (defaults filled in). */
+  beamHeight: number;
+  beamWidth: number;
+  panelThickness: number;
+  offset: number | null;
+  /** Face distances within which no offset edge vanishes: [against the normals (< 0), towards them (> 0)]; ±Infinity where none does. */
+  offsetRange: [number, number];
+  /** Edges of one panel, and those the boundary rule made planar. */
+  boundaryBeams: number;
+  boundaryBeamsPlanar: number;
+  /** Runs of boundary edges, and those solved planar. */
+  boundaryRuns: number;
+  boundaryRunsPlanar: number;
+  /** The largest twist of a boundary beam, in degrees (0 where all are planar). */
+  boundaryTwistMaxDeg: number;
+  /** The largest turn of a boundary axis from the surface normal, in degrees. */
+  boundaryTurnMaxDeg: number;
+  beamPlanarityMax: number;
+  /** Over beams of two panels between exact nodes: round-off. */
+  interiorBeamPlanarityMax: number;
+  /** How far nodes moved onto their planes, over the mean edge. */
+  nodesMovedOntoPlanesMax: number;
+  /** What a designer should know: best-fit and folded nodes by name, the boundary rule's outcome, pinched panels. */
+  notes: string[];
+}
+
+/** The structure on a P-Hex mesh: {@link PHex.structure}. */
+export interface Structure {
+  /** The offset at face distance `offset`, in the mesh's vertex and face order (present when `offset` was given). */
+  offset?: Mesh;
+  nodes: StructureNodes;
+  beams: StructureBeams;
+  solid: StructureSolid;
+  report: StructureReport;
+}
+
 /** A loaded phex instance. */
 export interface PHex {
   /**
@@ -479,10 +620,31 @@ export interface PHex {
   /**
    * The beam schedule of a polygon mesh (a run's `hex`) as CSV, one row per edge: label B<k>, its nodes (1-based
    * vertex ids) and their positions, length, the panels on its left and right (empty at the boundary) and the
-   * fold between them in degrees (positive at a ridge seen from the normal side, negative in a valley). Rejects
-   * with 'invalid_input' for a malformed mesh or an edge of more than two faces. Queued like run().
+   * fold between them in degrees (positive at a ridge seen from the normal side, negative in a valley). With
+   * `beamHeight` (and the other structure options), each row gains the structure's beam: its heights at either end,
+   * plane (normal, offset), planarity, twist and the quad's four corners. Rejects with 'invalid_input' for a
+   * malformed mesh or an edge of more than two faces. Queued like run().
    */
-  beams(mesh: Mesh): Promise<string>;
+  beams(mesh: Mesh, options?: StructureOptions): Promise<string>;
+  /**
+   * The structure on a polygon mesh (a run's `hex`): every P-Hex mesh is conical (§1), so its faces can be offset
+   * at a constant distance, each node has an axis equidistant from its panels' planes, and the beam spanned by an
+   * edge and its two axes is a planar quad. Resolves to the nodes, the beams, the solid model (typed arrays for
+   * three.js) and a report; with `offset`, also the offset mesh. Nodes of four or more panels and folded ones get a
+   * stated best fit and are named in the report's notes; boundary axes turn for planar boundary beams where that
+   * keeps them within 30° of the surface normal. Rejects with 'invalid_parameter' naming the option for a bad
+   * distance (the message also names the panel that collapses and the range that can be taken), 'invalid_input'
+   * for a malformed mesh. Queued like run(); the instance keeps working after a rejection.
+   */
+  structure(mesh: Mesh, options?: StructureOptions): Promise<Structure>;
+  /**
+   * The node schedule as CSV, one row per node (1-based, as in OBJ and the beam schedule): kind, faces, position,
+   * unit axis, scale |a|, the panels at it, the angles between the axis and each panel's plane in degrees (equal at
+   * a cone node), the axis' angle to the mean normal, the residual. Queued like run().
+   */
+  nodes(mesh: Mesh): Promise<string>;
+  /** The structure's solid model as OBJ text: an object per panel (P<n>) and per beam (B<k>). Queued like run(). */
+  structureOBJ(mesh: Mesh, options?: StructureOptions): Promise<string>;
   /** Version of the phex core, e.g. "0.1.0". */
   readonly version: string;
   /** Stops the worker and frees the wasm instance; pending runs reject with code 'cancelled' and later calls fail. */

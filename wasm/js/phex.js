@@ -40,6 +40,32 @@ export const PARAMETERS = Object.freeze([
   { name: 'lowerBound', type: 'number', default: 0.3, min: 0, max: 2, requires: 'lowerBound', description: 'Lower bound b on the step ratio |CM|/|AB| near parabolic curves (§5.3), applied smoothly; 0 turns it off.' },
 ]);
 
+/**
+ * The options of structure() (and of the structure's schedules and OBJ): face distances in model units. Missing
+ * ones take their defaults; the core enforces the ranges (its messages name the option, the distance and the panel
+ * that collapses).
+ */
+export const STRUCTURE_OPTIONS = Object.freeze([
+  { name: 'offset', type: 'number', default: null, description: 'Face distance of the offset mesh (either side, not 0; > 0 towards the normals): every face plane moved by it, each node along its axis. Default (null): no offset mesh.' },
+  { name: 'beamHeight', type: 'number', default: null, min: 0, description: 'Height of the beams behind the panels, as a face distance (> 0): one planar quad per edge between the mesh and its offset at -beamHeight. Default (null): a fifth of the mean edge length.' },
+  { name: 'beamWidth', type: 'number', default: null, min: 0, description: 'Width of the beams in the solid model (> 0). Default (null): a quarter of the beam height.' },
+  { name: 'panelThickness', type: 'number', default: null, min: 0, description: 'Thickness of the panels in the solid model (> 0), towards the normal side. Default (null): a fiftieth of the mean edge length.' },
+]);
+
+/** The structure options without undefined or null entries; a non-number is named (ranges are the core's). */
+function checkStructureOptions(options) {
+  if (options === null || typeof options !== 'object' || Array.isArray(options)) throw invalid(`structure options must be an object, got ${describe(options)}`);
+  const known = STRUCTURE_OPTIONS.map((o) => o.name);
+  const out = {};
+  for (const [name, value] of Object.entries(options)) {
+    if (!known.includes(name)) throw invalid(`unknown structure option '${name}' (known: ${known.join(', ')})`);
+    if (value === undefined || value === null) continue;
+    checkNumber(name, value);
+    out[name] = value;
+  }
+  return out;
+}
+
 /** Formats of uploaded meshes: run({mesh, meshFormat}). */
 export const MESH_FORMATS = Object.freeze(['obj', 'off', 'ply', 'stl']);
 
@@ -354,10 +380,44 @@ class PHex {
 
   /**
    * The edges of a polygon mesh (a run's `hex`) as the frame's beam schedule, CSV: one row per beam with its
-   * nodes, length, the panels either side and the fold between them (positive at a ridge). Resolves to the text.
+   * nodes, length, the panels either side and the fold between them (positive at a ridge). With `beamHeight` (and
+   * the other structure options), each row gains the structure's beam: heights, plane, planarity, twist and the
+   * quad's corners. Resolves to the text.
    */
-  beams(mesh) {
-    return this.#enqueue(() => this.#backend.call('fabrication', [mesh, { format: 'beams' }])).then((value) => value.text);
+  beams(mesh, options = {}) {
+    return this.#fabricate(mesh, 'beams', options);
+  }
+
+  /**
+   * The structure on a polygon mesh (a run's `hex`; phex's P-Hex meshes are conical, §1): every node's axis, the
+   * offset at face distance `offset` (where given), one planar beam per edge of height `beamHeight` behind the
+   * panels, and the solid model (panels with a thickness, beams with a width, the axes) as typed arrays for
+   * three.js. See phex.d.ts for the fields. A distance the offset cannot take is a PHexError naming the option,
+   * the panel and the range that can be taken.
+   */
+  structure(mesh, options = {}) {
+    return new Promise((resolve) => {
+      const checked = checkStructureOptions(options);
+      resolve(this.#enqueue(() => this.#backend.call('structure', [mesh, checked])));
+    });
+  }
+
+  /** The node schedule of a polygon mesh, CSV: position, axis, the panels at each node and the angles between. */
+  nodes(mesh) {
+    return this.#fabricate(mesh, 'nodes', {});
+  }
+
+  /** The structure's solid model as OBJ text: an object per panel (P<n>) and per beam (B<k>). */
+  structureOBJ(mesh, options = {}) {
+    return this.#fabricate(mesh, 'structure-obj', options);
+  }
+
+  /** A fabrication text of `format` with the structure options checked. */
+  #fabricate(mesh, format, options) {
+    return new Promise((resolve) => {
+      const checked = checkStructureOptions(options);
+      resolve(this.#enqueue(() => this.#backend.call('fabrication', [mesh, { ...checked, format }])));
+    }).then((value) => value.text);
   }
 
   /**

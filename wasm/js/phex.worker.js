@@ -64,6 +64,9 @@ export async function loadEngine() {
     fabrication(mesh, options) {
       return answer(core.fabrication(mesh, options));
     },
+    structure(mesh, options) {
+      return answer(core.structure(mesh, options));
+    },
     /** Test-only: the core fails as a bug in it would (see PHex.debugTrap). */
     debugTrap(kind) {
       core.debugTrap(kind);
@@ -97,7 +100,7 @@ function serve() {
     ({ version, surfaces, capabilities }) => postMessage({ type: 'ready', info: { version, surfaces, capabilities } }),
     (error) => postMessage({ type: 'failed', message: `could not load the phex wasm module: ${error?.message ?? error}` }),
   );
-  const METHODS = ['run', 'surfacePreview', 'memory', 'fabrication', 'clearUploadCache', 'debugTrap'];
+  const METHODS = ['run', 'surfacePreview', 'memory', 'fabrication', 'structure', 'clearUploadCache', 'debugTrap'];
   addEventListener('message', async ({ data }) => {
     if (data?.type !== 'call' || !METHODS.includes(data.method)) return;
     const engine = await ready;

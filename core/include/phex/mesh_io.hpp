@@ -50,13 +50,20 @@ TriMesh readMeshBytes(const std::uint8_t* data, std::size_t size, const std::str
 // The checks and repairs every reader ends with; usable on a mesh from anywhere (e.g. typed arrays).
 //   V  #V by 3 positions, F  #F by 3 vertex ids (0-based).
 // Rejects (Error(InvalidInput), message starting with `name`): no triangles, an index out of range,
-// a non-finite coordinate or one beyond ±kMaxMeshCoordinate, an edge with more than two triangles, a non-orientable component
-// (neighbours that no choice of orientations makes consistent), a vertex whose triangles form more
-// than one fan (two sheets touching at a point), or only degenerate triangles.
+// a non-finite coordinate or one beyond ±kMaxMeshCoordinate, an edge with more than two triangles, a
+// non-orientable component (neighbours that no choice of orientations makes consistent), a vertex whose
+// triangles form more than one fan (two sheets touching at a point), or only degenerate triangles.
 // Repairs (counted in `report`): drops triangles with a repeated vertex or zero area; flips triangles
 // so each connected component is consistently oriented (a closed component with outward normals, an
 // open one keeping the orientation of most of its triangles in the file); removes unused vertices,
 // keeping the order of the others.
 TriMesh cleanTriMesh(const TriMesh& raw, const std::string& name, MeshReadReport* report = nullptr);
+
+// Appends the triangles of one polygon to `tri` (vertex ids, three per triangle, turning as the polygon does): ear
+// clipping in the polygon's Newell plane, so a non-convex face stays inside its outline; a polygon with no ear
+// left (self-intersecting or degenerate) is finished as a fan. `ids` index the points of `xyz` (x, y, z each).
+// Near-linear in the corners; false (nothing appended) for a polygon so convoluted that its ears take more than
+// kPolygonTestsPerCorner point tests per corner and a million in all (a hexagon takes a few dozen).
+bool triangulatePolygon(const std::vector<int>& ids, const double* xyz, std::vector<int>& tri);
 
 }  // namespace phex

@@ -8,6 +8,28 @@
 
 namespace phex {
 
+// "P" followed by face + 1: the label of a face's panel on the cut sheet and in the schedules (1-based, as in OBJ).
+std::string panelLabel(int face);
+// Ten significant digits and no "-0": the numbers of the schedules and the cut sheet (a 100 m facade to a
+// hundredth of a millimetre).
+std::string formatNumber(double x);
+
+// Checks what every fabrication output needs of a polygon mesh and throws Error(InvalidInput) naming the first
+// defect, the message starting with `who` ("panels", "structure"): face offsets that do not span the face
+// indices, no faces, a coordinate that is not finite, a face of fewer than three corners or one naming a vertex out
+// of range. (Degenerate faces are found where each output measures them.)
+void checkPolyMesh(const PolyMesh& mesh, const std::string& who);
+
+// An edge of a polygon mesh: a beam of the frame.
+struct MeshEdge {
+  int a = 0, b = 0;          // its nodes, in the direction the left face runs it
+  int left = 0, right = -1;  // the faces either side (right: the other face; -1 at the boundary)
+};
+// Every edge of `mesh` once, in order of first use by the faces: beam B<k> of the schedules is edges[k - 1].
+// Throws Error(InvalidInput), the message starting with `who`, naming the edge where more than two faces share it
+// or two run it the same way. Expects a mesh checkPolyMesh passes.
+std::vector<MeshEdge> meshEdges(const PolyMesh& mesh, const std::string& who = "panels");
+
 // One face laid flat in its own (least-squares) plane. The outline's frame: corner `base` at the origin, the
 // edge from it to the next corner (the longest edge) along +x, +y towards the face, so the outline runs
 // counterclockwise seen from the side its normal points to (the surface's normal side for phex meshes).
