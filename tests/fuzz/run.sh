@@ -1,23 +1,25 @@
 #!/usr/bin/env bash
 # phex — runs each fuzz target for FUZZ_SECONDS (make fuzz; make test runs it briefly). Each starts from its
 # seeds (tests/fuzz/corpus/TARGET) and the files fuzzing found (tests/fuzz/regressions), keeps what it
-# learns in build/fuzz/corpus/TARGET, and writes a finding to build/fuzz/findings/; any finding fails the run.
+# learns in build/fuzz/corpus/TARGET (or FUZZ_CORPUS/TARGET), and writes a finding to build/fuzz/findings/;
+# any finding fails the run.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 build="$here/../../build/fuzz"
 seconds="${FUZZ_SECONDS:-60}"
+corpus="${FUZZ_CORPUS:-$build/corpus}"  # what runs learn; make test starts from an empty one, to stay short
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(read_obj read_off read_ply read_stl mesh_surface pipeline)
 mkdir -p "$build/findings"
 failed=()
 for t in "${targets[@]}"; do
-  mkdir -p "$build/corpus/$t"
+  mkdir -p "$corpus/$t"
   options=(-max_total_time="$seconds" -timeout=30 -rss_limit_mb=2048 -max_len=4096 -print_final_stats=1
            -artifact_prefix="$build/findings/$t-")
   # Readers take files: their keywords help; the others take structured bytes (fuzz.hpp).
   case "$t" in read_*) options+=(-dict="$here/mesh.dict") ;; esac
   log="$build/$t-$$.log"  # one per run: a campaign and make test may fuzz at the same time
-  if nice "$build/fuzz_$t" "${options[@]}" "$build/corpus/$t" "$here/corpus/$t" "$here/regressions" >"$log" 2>&1; then
+  if nice "$build/fuzz_$t" "${options[@]}" "$corpus/$t" "$here/corpus/$t" "$here/regressions" >"$log" 2>&1; then
     status=ok
   else
     status=FINDING
