@@ -6,7 +6,7 @@ export NODE_PATH := /usr/share/nodejs
 NODE := node --no-experimental-fetch
 PORT ?= 8080
 
-.PHONY: all setup native wasm web test test-native test-wasm test-cli test-js test-browser demo bench clean
+.PHONY: all setup native wasm web test test-native test-wasm test-cli test-js test-browser test-fuzz fuzz demo bench clean
 
 all: native wasm web
 
@@ -26,7 +26,7 @@ web: wasm
 	@npm run --silent build:web
 
 test: native wasm web
-	@$(MAKE) --no-print-directory test-native test-wasm test-cli test-js test-browser
+	@$(MAKE) --no-print-directory test-native test-wasm test-cli test-js test-browser test-fuzz
 
 test-native:
 	@echo "== Catch2, native (ctest)"
@@ -47,6 +47,21 @@ test-js:
 test-browser:
 	@echo "== app in headless Chromium"
 	@node --test tests/browser/
+
+# Each fuzz target briefly (about a minute in all), so that a regression shows: from the seeds and regressions
+# alone, since replaying a long campaign's corpus would take longer than that.
+test-fuzz:
+	@rm -rf build/fuzz/smoke
+	@$(MAKE) --no-print-directory fuzz FUZZ_SECONDS=10 FUZZ_CORPUS=$(CURDIR)/build/fuzz/smoke
+
+# The libFuzzer targets of tests/fuzz, built by clang with sanitizers in build/fuzz (apart from the release
+# builds), each run for FUZZ_SECONDS.
+FUZZ_SECONDS ?= 300
+fuzz: setup
+	@[ -f build/fuzz/build.ninja ] || CXX=clang++ cmake -S tests/fuzz -B build/fuzz -G Ninja >/dev/null
+	@cmake --build build/fuzz
+	@echo "== fuzzing, $(FUZZ_SECONDS) s per target"
+	@FUZZ_SECONDS=$(FUZZ_SECONDS) FUZZ_CORPUS=$(FUZZ_CORPUS) bash tests/fuzz/run.sh
 
 demo: native wasm web
 	@node scripts/serve.js build/web $(PORT)

@@ -8,7 +8,8 @@ ceres_wasm="$cache/ceres-wasm"
 sudo=""; [ "$(id -u)" = 0 ] || sudo="sudo"
 
 need_pkgs=()
-for p in g++ cmake ninja-build make libeigen3-dev libceres-dev catch2 nlohmann-json3-dev libfast-float-dev libtinygltf-dev emscripten chromium nodejs dpkg-dev; do
+# clang and libclang-rt-dev (libFuzzer's and the sanitizers' runtimes) build the fuzz targets (make fuzz).
+for p in g++ cmake ninja-build make libeigen3-dev libceres-dev catch2 nlohmann-json3-dev libfast-float-dev libtinygltf-dev emscripten chromium nodejs dpkg-dev clang libclang-rt-dev; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || need_pkgs+=("$p")
 done
 if [ ${#need_pkgs[@]} -gt 0 ]; then

@@ -13,6 +13,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 
 using emscripten::val;
@@ -552,6 +555,17 @@ val structure(val mesh, val options) {
 
 void clearUploadCache() { phex::clearUploadCache(); }
 
+// Test-only: the core fails as a bug in it would, beyond any C++ handler, so that tests can check that a page
+// survives one: 'unreachable' (a trap), 'abort' (abort()), 'memory' (a read past the end of the heap).
+void debugTrap(std::string kind) {
+  if (kind == "abort") std::abort();
+  if (kind == "memory") {
+    const auto end = static_cast<std::uintptr_t>(emscripten::val::module_property("HEAPU8")["byteLength"].as<double>());
+    std::printf("%d\n", *reinterpret_cast<volatile const char*>(end + 16));
+  }
+  __builtin_trap();
+}
+
 double heapBytes() { return static_cast<double>(emscripten::val::module_property("HEAPU8")["byteLength"].as<double>()); }
 
 // Bytes malloc has handed out and not taken back: flat across runs when nothing leaks.
@@ -570,4 +584,5 @@ EMSCRIPTEN_BINDINGS(phex) {
   emscripten::function("structure", &structure);
   emscripten::function("mallocedBytes", &mallocedBytes);
   emscripten::function("clearUploadCache", &clearUploadCache);
+  emscripten::function("debugTrap", &debugTrap);
 }

@@ -1,6 +1,7 @@
 #include "phex/mesh_io.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -46,12 +47,12 @@ TriMesh toTriMesh(const RawMesh& raw) {
   return mesh;
 }
 
-void checkTriangleLimit(const std::string& name, std::size_t triangles) {
+void checkTriangleLimit(const std::string& name, std::uint64_t triangles) {  // 64 bits: counts from files, in wasm too
   if (triangles > kMaxMeshTriangles)
     fail(name, "more than " + std::to_string(kMaxMeshTriangles) + " triangles (phex's limit)");
 }
 
-void checkVertexLimit(const std::string& name, std::size_t vertices) {
+void checkVertexLimit(const std::string& name, std::uint64_t vertices) {
   if (vertices > kMaxMeshVertices)
     fail(name, "more than " + std::to_string(kMaxMeshVertices) + " vertices (phex's limit)");
 }
@@ -112,16 +113,21 @@ class TextReader {
     if (requireFinite && !std::isfinite(x)) fail(std::string(what) + " is " + std::string(t) + " (coordinates must be finite)");
     return x;
   }
-  long integer(std::string_view t, const char* what) {
+  // 64 bits in wasm too (its long has 32): the same numbers are in range, with the same messages, everywhere.
+  long long integer(std::string_view t, const char* what) {
     char buf[32];
     if (t.size() >= sizeof buf) fail(std::string(what) + " '" + std::string(t.substr(0, 20)) + "...' is too long for an integer");
     std::memcpy(buf, t.data(), t.size());
     buf[t.size()] = '\0';
     char* end = nullptr;
-    const long x = std::strtol(buf, &end, 10);
+    errno = 0;
+    const long long x = std::strtoll(buf, &end, 10);
     if (t.empty() || end != buf + t.size()) fail(std::string(what) + " '" + std::string(t) + "' is not an integer");
+    if (errno == ERANGE) fail(std::string(what) + " " + std::string(t) + " is out of range");
     return x;
   }
+  // Where the next token would start: the bytes before it are read.
+  std::size_t position() const { return pos_; }
 
  private:
   static bool isSpace(std::uint8_t c) { return c == ' ' || c == '\t' || c == '\f' || c == '\v'; }
@@ -165,54 +171,225 @@ class TextReader {
   std::string name_;
 };
 
-}  // namespace
-
 // ---------------------------------------------------------------------------------------------------
 // Polygons become triangles by ear clipping in the polygon's Newell plane, so non-convex faces stay inside
-// their outline; a polygon with no ear left (self-intersecting or degenerate) is finished as a fan.
-void triangulatePolygon(const std::vector<int>& ids, const double* xyz, std::vector<int>& tri) {
-  const int n = static_cast<int>(ids.size());
-  if (n == 3) {
-    tri.insert(tri.end(), ids.begin(), ids.end());
-    return;
-  }
-  auto P = [&](int i) { return Vec3(xyz[3 * ids[i]], xyz[3 * ids[i] + 1], xyz[3 * ids[i] + 2]); };
-  Vec3 normal = Vec3::Zero();
-  for (int i = 0; i < n; ++i) normal += P(i).cross(P((i + 1) % n));
-  std::vector<int> rest(n);
-  std::iota(rest.begin(), rest.end(), 0);
-  if (normal.norm() > 0) {
-    const Vec3 u = normal.unitOrthogonal(), v = normal.normalized().cross(u);
-    std::vector<Vec2> q(n);
-    for (int i = 0; i < n; ++i) q[i] = Vec2(P(i).dot(u), P(i).dot(v));
-    auto cross2 = [](const Vec2& a, const Vec2& b, const Vec2& c) {
-      return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
-    };
-    while (rest.size() > 3) {
-      const int m = static_cast<int>(rest.size());
-      bool clipped = false;
-      for (int i = 0; i < m && !clipped; ++i) {
-        const int a = rest[(i + m - 1) % m], b = rest[i], c = rest[(i + 1) % m];
-        if (cross2(q[a], q[b], q[c]) <= 0) continue;  // reflex corner
-        bool empty = true;
-        for (int j : rest)
-          if (j != a && j != b && j != c && cross2(q[a], q[b], q[j]) >= 0 && cross2(q[b], q[c], q[j]) >= 0 &&
-              cross2(q[c], q[a], q[j]) >= 0) {
-            empty = false;
-            break;
-          }
-        if (!empty) continue;
-        tri.insert(tri.end(), {ids[a], ids[b], ids[c]});
-        rest.erase(rest.begin() + i);
-        clipped = true;
-      }
-      if (!clipped) break;
+// their outline; a polygon with no ear left (self-intersecting or degenerate) is finished as a fan. Near-linear
+// (CAD tools write caps of tens of thousands of corners): the corners form a ring and the ears a list in ring
+// order; clipping an ear changes only its two neighbours, which are looked at again (in a simple polygon only
+// reflex corners can lie in an ear, so no other corner's ear comes or goes). Reflex corners are found through
+// a k-d tree. The next ear clipped is the one after the next neighbour, which keeps a convex polygon's
+// triangles from fanning out of one corner.
+class PolygonTriangulator {
+ public:
+  // Appends the triangles of polygon `ids` (vertex ids into xyz, 3 per vertex) to `tri`; false (and nothing
+  // appended) where its ears took more than kPolygonTestsPerCorner point tests per corner.
+  bool add(const std::vector<int>& ids, const double* xyz, std::vector<int>& tri) {
+    const int n = static_cast<int>(ids.size());
+    if (n == 3) {
+      tri.insert(tri.end(), ids.begin(), ids.end());
+      return true;
     }
+    auto P = [&](int i) { return Vec3(xyz[3 * ids[i]], xyz[3 * ids[i] + 1], xyz[3 * ids[i] + 2]); };
+    Vec3 normal = Vec3::Zero();
+    for (int i = 0; i < n; ++i) normal += P(i).cross(P((i + 1) % n));
+    prev_.resize(n);
+    next_.resize(n);
+    for (int i = 0; i < n; ++i) prev_[i] = (i + n - 1) % n, next_[i] = (i + 1) % n;
+    const std::size_t before = tri.size();
+    int first = 0, remaining = n;
+    // Coordinates so large that the normal overflows are refused later (cleanTriMesh).
+    if (normal.norm() > 0 && std::isfinite(normal.norm())) {
+      const Vec3 u = normal.unitOrthogonal(), v = normal.normalized().cross(u);
+      q_.resize(n);
+      for (int i = 0; i < n; ++i) q_[i] = Vec2(P(i).dot(u), P(i).dot(v));  // counter-clockwise
+      if (!clipEars(ids, tri, first, remaining)) {
+        tri.resize(before);
+        return false;
+      }
+    }
+    // What is left, as a fan from its lowest corner (three corners: that triangle).
+    int low = first;
+    for (int i = next_[first]; i != first; i = next_[i]) low = std::min(low, i);
+    for (int i = next_[low]; next_[i] != low; i = next_[i]) tri.insert(tri.end(), {ids[low], ids[i], ids[next_[i]]});
+    return true;
   }
-  for (std::size_t i = 1; i + 1 < rest.size(); ++i) tri.insert(tri.end(), {ids[rest[0]], ids[rest[i]], ids[rest[i + 1]]});
+
+ private:
+  static double cross2(const Vec2& a, const Vec2& b, const Vec2& c) {
+    return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+  }
+  // Convex: turning left by more than cleanTriMesh's degenerate triangles do (relative to the longest side),
+  // so that no ear is dropped there as degenerate and leaves a hole (rounded coordinates make such corners).
+  bool isReflex(int b) const {
+    const Vec2 &a = q_[prev_[b]], &p = q_[b], &c = q_[next_[b]];
+    const double longest = std::max({(p - a).squaredNorm(), (c - p).squaredNorm(), (a - c).squaredNorm()});
+    return !(cross2(a, p, c) > 1e-10 * longest);
+  }
+
+  // The reflex corners as a k-d tree: an array ordered by median splits, x and y in turn (ties by index, so
+  // that the tree is the same with every standard library). Corners that stopped being reflex stay in it,
+  // skipped; corners that became reflex (self-intersecting polygons) wait in extra_ until it is rebuilt.
+  static constexpr int kLeaf = 8;
+  void buildTree(int first) {
+    tree_.clear();
+    extra_.clear();
+    int i = first;
+    do {
+      if (reflex_[i]) tree_.push_back(i);
+      i = next_[i];
+    } while (i != first);
+    active_ = static_cast<int>(tree_.size());
+    treeLo_ = treeHi_ = q_[first];
+    for (int r : tree_) treeLo_ = treeLo_.cwiseMin(q_[r]), treeHi_ = treeHi_.cwiseMax(q_[r]);
+    split(0, active_, 0);
+  }
+  void split(int begin, int end, int axis) {
+    if (end - begin <= kLeaf) return;
+    const int mid = (begin + end) / 2;
+    std::nth_element(tree_.begin() + begin, tree_.begin() + mid, tree_.begin() + end, [&](int a, int b) {
+      return q_[a](axis) < q_[b](axis) || (q_[a](axis) == q_[b](axis) && a < b);
+    });
+    split(begin, mid, 1 - axis);
+    split(mid + 1, end, 1 - axis);
+  }
+  // Corner b is an ear: convex, and no reflex corner but its neighbours lies in its triangle (edges included).
+  bool isEar(int b) {
+    ++tests_;
+    if (reflex_[b]) return false;
+    const int a = prev_[b], c = next_[b];
+    const Vec2 lo = q_[a].cwiseMin(q_[b]).cwiseMin(q_[c]), hi = q_[a].cwiseMax(q_[b]).cwiseMax(q_[c]);
+    auto inside = [&](int r) {
+      ++tests_;
+      return reflex_[r] && r != a && r != c && cross2(q_[a], q_[b], q_[r]) >= 0 && cross2(q_[b], q_[c], q_[r]) >= 0 &&
+             cross2(q_[c], q_[a], q_[r]) >= 0;
+    };
+    for (int r : extra_)
+      if (inside(r)) return false;
+    // Whether the triangle misses a node's rectangle: all of it outside one of the (counter-clockwise) edges.
+    auto misses = [&](const Vec2& rlo, const Vec2& rhi) {
+      for (const auto& [p, e] : {std::pair(q_[a], Vec2(q_[b] - q_[a])), std::pair(q_[b], Vec2(q_[c] - q_[b])),
+                                 std::pair(q_[c], Vec2(q_[a] - q_[c]))}) {
+        const Vec2 farthest(e.y() < 0 ? rhi.x() : rlo.x(), e.x() > 0 ? rhi.y() : rlo.y());  // most to the left
+        if (e.x() * (farthest.y() - p.y()) - e.y() * (farthest.x() - p.x()) < 0) return true;
+      }
+      return false;
+    };
+    struct Range {
+      int begin, end, axis;
+      Vec2 lo, hi;  // the node's rectangle
+    };
+    Range stack[64];  // two per level at most: the tree is 25 levels deep for kMaxMeshTriangles corners
+    int top = 0;
+    stack[top++] = {0, static_cast<int>(tree_.size()), 0, treeLo_, treeHi_};
+    while (top > 0) {
+      const Range t = stack[--top];
+      if (t.end - t.begin <= kLeaf) {
+        for (int k = t.begin; k < t.end; ++k)
+          if (inside(tree_[k])) return false;
+        continue;
+      }
+      const int mid = (t.begin + t.end) / 2, r = tree_[mid];
+      if (inside(r)) return false;
+      const double at = q_[r](t.axis);
+      Vec2 leftHi = t.hi, rightLo = t.lo;
+      leftHi(t.axis) = at, rightLo(t.axis) = at;
+      if (lo(t.axis) <= at && !misses(t.lo, leftHi)) stack[top++] = {t.begin, mid, 1 - t.axis, t.lo, leftHi};
+      if (hi(t.axis) >= at && !misses(rightLo, t.hi)) stack[top++] = {mid + 1, t.end, 1 - t.axis, rightLo, t.hi};
+    }
+    return true;
+  }
+
+  // The ears, a circular list in ring order (earNext_ / earPrev_; -1: not an ear).
+  void linkEar(int x, int before) {  // before: an ear, or -1 when there is none
+    if (before < 0) {
+      earNext_[x] = earPrev_[x] = x;
+    } else {
+      earNext_[x] = before, earPrev_[x] = earPrev_[before];
+      earNext_[earPrev_[before]] = x, earPrev_[before] = x;
+    }
+    ++ears_;
+  }
+  void unlinkEar(int x) {
+    earNext_[earPrev_[x]] = earNext_[x], earPrev_[earNext_[x]] = earPrev_[x];
+    earNext_[x] = earPrev_[x] = -1;
+    --ears_;
+  }
+  // Every corner left looked at, into an empty list (at the start, and where no ear is left: a
+  // self-intersecting polygon); the first ear from `first` on, or -1.
+  int findEars(int first) {
+    int head = -1, i = first;
+    do {
+      if (isEar(i)) linkEar(i, head), head = head < 0 ? i : head;  // before the head: at the end of the circle
+      i = next_[i];
+    } while (i != first);
+    return head;
+  }
+
+  bool clipEars(const std::vector<int>& ids, std::vector<int>& tri, int& first, int& remaining) {
+    const int n = remaining;
+    reflex_.resize(n);
+    for (int i = 0; i < n; ++i) reflex_[i] = isReflex(i);
+    buildTree(first);
+    earNext_.assign(n, -1);
+    earPrev_.assign(n, -1);
+    ears_ = 0;
+    tests_ = 0;
+    const long long budget = static_cast<long long>(kPolygonTestsPerCorner) * n + 1000000;
+    int ear = findEars(first);
+    while (remaining > 3 && tests_ <= budget) {
+      if (ear < 0 && (ear = findEars(first)) < 0) break;  // no ear at all: the fan
+      const int b = ear, a = prev_[b], c = next_[b];
+      tri.insert(tri.end(), {ids[a], ids[b], ids[c]});
+      next_[a] = c, prev_[c] = a;
+      --remaining;
+      first = c;
+      const int after = earNext_[b] == b ? -1 : earNext_[b];
+      unlinkEar(b);
+      // The first ear past c (in ring order), where the scan goes on: skipping c spreads the triangles.
+      const int beyond = after == c ? (earNext_[c] == c ? -1 : earNext_[c]) : after;
+      // The neighbours' corners changed: a reflex one may have become convex (or, in a self-intersecting
+      // polygon, the other way round), and either may have become an ear or stopped being one.
+      for (int x : {a, c}) {
+        const bool now = isReflex(x);
+        if (reflex_[x] && !now) --active_;
+        if (!reflex_[x] && now) extra_.push_back(x), ++active_;
+        reflex_[x] = now;
+      }
+      // Rebuilt when most of the tree is skipped, or many corners wait beside it: amortized n log n.
+      if (2 * active_ + kLeaf < static_cast<int>(tree_.size()) || static_cast<int>(extra_.size()) > kLeaf + active_ / 4)
+        buildTree(first);
+      for (int x : {c, a}) {  // c first: a goes in before it
+        const bool now = isEar(x), listed = earNext_[x] >= 0;
+        if (listed && !now) unlinkEar(x);
+        if (!listed && now) linkEar(x, x == a && earNext_[c] >= 0 ? c : beyond);
+      }
+      ear = ears_ == 0 ? -1 : beyond >= 0 && earNext_[beyond] >= 0 ? beyond : earNext_[c] >= 0 ? earNext_[c] : earNext_[a];
+    }
+    return tests_ <= budget;
+  }
+
+  std::vector<int> prev_, next_, tree_, extra_, earNext_, earPrev_;
+  std::vector<char> reflex_;
+  std::vector<Vec2> q_;
+  Vec2 treeLo_, treeHi_;  // the reflex corners' box
+  int active_ = 0;  // reflex corners, in the tree or in extra_
+  int ears_ = 0;
+  long long tests_ = 0;
+};
+
+}  // namespace
+
+bool triangulatePolygon(const std::vector<int>& ids, const double* xyz, std::vector<int>& tri) {
+  thread_local PolygonTriangulator triangulator;  // its buffers kept from one polygon to the next
+  return triangulator.add(ids, xyz, tri);
 }
 
 namespace {
+
+std::string convolutedPolygon(std::size_t corners) {
+  return std::to_string(corners) + " corners: too convoluted to triangulate (its ears took more than " +
+         std::to_string(kPolygonTestsPerCorner) + " point tests per corner): split it into smaller polygons";
+}
 
 // ---------------------------------------------------------------------------------------------------
 // OBJ: `v x y z [w]` and `f a b c ...` with a = i, i/t, i//n or i/t/n (negative i counts back from the
@@ -221,7 +398,7 @@ RawMesh readObj(const std::uint8_t* data, std::size_t size, const std::string& n
   TextReader in(data, size, name, 0, 1, true);
   RawMesh mesh;
   std::vector<int> polygonIds, offsets{0}, polygonLine;
-  long forwardIndex = 0;
+  long long forwardIndex = 0;
   int forwardLine = 0;
   std::string_view t;
   while (in.token(t)) {
@@ -236,13 +413,13 @@ RawMesh readObj(const std::uint8_t* data, std::size_t size, const std::string& n
       const int before = static_cast<int>(polygonIds.size());
       std::string_view ref;
       while (in.tokenOnLine(ref)) {
-        const long i = in.integer(ref.substr(0, ref.find('/')), "vertex index");
-        const long defined = mesh.vertexCount();
+        const long long i = in.integer(ref.substr(0, ref.find('/')), "vertex index");
+        const long long defined = mesh.vertexCount();
         if (i == 0) in.fail("vertex index 0 (OBJ counts from 1)");
-        if (i < 0 && -i > defined)
+        if (i < -defined)  // not -i > defined: -LONG_MIN overflows
           in.fail("relative vertex index " + std::to_string(i) + " reaches before the first vertex (" +
                   std::to_string(defined) + " defined so far)");
-        if (i > static_cast<long>(kMaxMeshVertices)) in.fail("vertex index " + std::to_string(i) + " is out of range");
+        if (i > static_cast<long long>(kMaxMeshVertices)) in.fail("vertex index " + std::to_string(i) + " is out of range");
         if (i > defined && i > forwardIndex) forwardIndex = i, forwardLine = in.line();
         polygonIds.push_back(static_cast<int>(i < 0 ? defined + i : i - 1));
       }
@@ -260,7 +437,8 @@ RawMesh readObj(const std::uint8_t* data, std::size_t size, const std::string& n
   std::vector<int> ids;
   for (std::size_t f = 0; f + 1 < offsets.size(); ++f) {
     ids.assign(polygonIds.begin() + offsets[f], polygonIds.begin() + offsets[f + 1]);
-    triangulatePolygon(ids, mesh.xyz.data(), mesh.tri);
+    if (!triangulatePolygon(ids, mesh.xyz.data(), mesh.tri))
+      failAt(name, "line " + std::to_string(polygonLine[f]), "a face of " + convolutedPolygon(ids.size()));
   }
   return mesh;
 }
@@ -272,18 +450,18 @@ RawMesh readOff(const std::uint8_t* data, std::size_t size, const std::string& n
   const std::string_view magic = in.require("the OFF header");
   if (magic != "OFF" && magic != "COFF" && magic != "NOFF" && magic != "CNOFF")
     in.fail("expected 'OFF' on the first line, found '" + std::string(magic.substr(0, 20)) + "'");
-  const long nv = in.integer(in.require("the vertex count"), "vertex count");
-  const long nf = in.integer(in.require("the face count"), "face count");
+  const long long nv = in.integer(in.require("the vertex count"), "vertex count");
+  const long long nf = in.integer(in.require("the face count"), "face count");
   in.integer(in.require("the edge count"), "edge count");
   if (nv < 0 || nf < 0) in.fail("negative vertex or face count");
-  checkVertexLimit(name, static_cast<std::size_t>(nv));
-  checkTriangleLimit(name, static_cast<std::size_t>(nf));
+  checkVertexLimit(name, static_cast<std::uint64_t>(nv));
+  checkTriangleLimit(name, static_cast<std::uint64_t>(nf));
   // Each vertex and face needs at least 6 bytes of text: a count beyond that is wrong, not a reason to allocate.
   if (static_cast<std::size_t>(nv + nf) > size / 6) in.fail("the header declares more vertices and faces than the file can hold");
   in.skipLine();
   RawMesh mesh;
   mesh.xyz.reserve(3 * nv);
-  for (long v = 0; v < nv; ++v) {
+  for (long long v = 0; v < nv; ++v) {
     std::string_view c;
     for (int k = 0; k < 3; ++k) {
       if (!in.token(c)) in.fail("file ends after " + std::to_string(v) + " of the " + std::to_string(nv) + " vertices declared");
@@ -292,21 +470,21 @@ RawMesh readOff(const std::uint8_t* data, std::size_t size, const std::string& n
     in.skipLine();
   }
   std::vector<int> ids;
-  for (long f = 0; f < nf; ++f) {
+  for (long long f = 0; f < nf; ++f) {
     std::string_view c;
     if (!in.token(c)) in.fail("file ends after " + std::to_string(f) + " of the " + std::to_string(nf) + " faces declared");
-    const long n = in.integer(c, "face size");
+    const long long n = in.integer(c, "face size");
     if (n < 3) in.fail("face " + std::to_string(f) + " has " + std::to_string(n) + " vertices (at least 3 needed)");
     ids.clear();
-    for (long k = 0; k < n; ++k) {
+    for (long long k = 0; k < n; ++k) {
       if (!in.tokenOnLine(c)) in.fail("face " + std::to_string(f) + " lists fewer than the " + std::to_string(n) + " vertices it declares");
-      const long i = in.integer(c, "vertex index");
+      const long long i = in.integer(c, "vertex index");
       if (i < 0 || i >= nv)
         in.fail("face " + std::to_string(f) + ": vertex index " + std::to_string(i) + " is out of range (the file has " +
                 std::to_string(nv) + " vertices, counted from 0)");
       ids.push_back(static_cast<int>(i));
     }
-    triangulatePolygon(ids, mesh.xyz.data(), mesh.tri);
+    if (!triangulatePolygon(ids, mesh.xyz.data(), mesh.tri)) in.fail("face " + std::to_string(f) + " of " + convolutedPolygon(ids.size()));
     checkTriangleLimit(name, mesh.tri.size() / 3);
     in.skipLine();
   }
@@ -342,6 +520,18 @@ std::size_t plySize(PlyType t) {
 
 bool plyIsInteger(PlyType t) { return t != PlyType::Float32 && t != PlyType::Float64; }
 
+// The values an integer type holds, and its name, for ascii values that must fit the type declared.
+void plyRange(PlyType t, long long& lo, long long& hi, const char*& name) {
+  switch (t) {
+    case PlyType::Int8: lo = INT8_MIN, hi = INT8_MAX, name = "char"; return;
+    case PlyType::UInt8: lo = 0, hi = UINT8_MAX, name = "uchar"; return;
+    case PlyType::Int16: lo = INT16_MIN, hi = INT16_MAX, name = "short"; return;
+    case PlyType::UInt16: lo = 0, hi = UINT16_MAX, name = "ushort"; return;
+    case PlyType::Int32: lo = INT32_MIN, hi = INT32_MAX, name = "int"; return;
+    default: lo = 0, hi = UINT32_MAX, name = "uint"; return;
+  }
+}
+
 struct PlyProperty {
   std::string name;
   PlyType type = PlyType::Float32;
@@ -351,7 +541,7 @@ struct PlyProperty {
 
 struct PlyElement {
   std::string name;
-  std::size_t count = 0;
+  std::uint64_t count = 0;  // not size_t: wasm's has 32 bits, and the header's count is checked whole
   std::vector<PlyProperty> properties;
 };
 
@@ -363,13 +553,22 @@ class PlyBody {
       : data_(data), size_(size), pos_(start), ascii_(encoding == "ascii"), bigEndian_(encoding == "binary_big_endian"),
         text_(data, size, name, start, line), name_(name) {}
 
-  void at(const std::string& element, std::size_t index) { element_ = element, index_ = index; }
+  void at(const std::string& element, std::uint64_t index) { element_ = element, index_ = index; }
 
   double value(PlyType t, const char* what) {
     if (ascii_) {
       std::string_view tok;
       if (!text_.token(tok)) fail("file ends inside " + where());
-      return plyIsInteger(t) ? static_cast<double>(text_.integer(tok, what)) : text_.number(tok, what, false);
+      if (!plyIsInteger(t)) return text_.number(tok, what, false);
+      // An integer out of its type's range is no value the type holds (and no count or index phex can use).
+      const long long x = text_.integer(tok, what);
+      long long lo, hi;
+      const char* type;
+      plyRange(t, lo, hi, type);
+      if (x < lo || x > hi)
+        fail(std::string(what) + " " + std::string(tok) + " of " + where() + " is out of range for its type " + type + " (" +
+             std::to_string(lo) + " to " + std::to_string(hi) + ")");
+      return static_cast<double>(x);
     }
     const std::size_t n = plySize(t);
     if (pos_ + n > size_) fail("file ends inside " + where() + " (truncated)");
@@ -404,6 +603,7 @@ class PlyBody {
 
   std::string where() const { return element_ + " " + std::to_string(index_); }
   bool ascii() const { return ascii_; }
+  std::size_t left() const { return size_ - (ascii_ ? text_.position() : pos_); }
 
  private:
   const std::uint8_t* data_;
@@ -411,7 +611,7 @@ class PlyBody {
   bool ascii_, bigEndian_;
   TextReader text_;
   std::string name_, element_;
-  std::size_t index_ = 0;
+  std::uint64_t index_ = 0;
 };
 
 // True when the bytes look like text (only printable characters and line ends): binary data does not.
@@ -444,9 +644,11 @@ RawMesh readPly(const std::uint8_t* data, std::size_t size, const std::string& n
     } else if (word == "element") {
       PlyElement e;
       e.name = std::string(header.require("the element name"));
-      const long count = header.integer(header.require("the element count"), "element count");
+      const long long count = header.integer(header.require("the element count"), "element count");
       if (count < 0) header.fail("negative count for element '" + e.name + "'");
-      e.count = static_cast<std::size_t>(count);
+      for (const PlyElement& before : elements)
+        if (before.name == e.name && (e.name == "vertex" || e.name == "face")) header.fail("a second '" + e.name + "' element");
+      e.count = static_cast<std::uint64_t>(count);
       const std::size_t limit = e.name == "vertex" ? kMaxMeshVertices : kMaxMeshTriangles;
       if ((e.name == "vertex" || e.name == "face") && e.count > limit)
         header.fail("more than " + std::to_string(limit) + " " + (e.name == "vertex" ? "vertices" : "faces") + " (phex's limit)");
@@ -486,14 +688,20 @@ RawMesh readPly(const std::uint8_t* data, std::size_t size, const std::string& n
   RawMesh mesh;
   bool sawVertex = false, sawFace = false;
   for (const PlyElement& e : elements) {
-    // Binary elements have a minimum size; a count beyond it is a wrong count, not a reason to allocate.
+    // Every element takes bytes (binary: its values and list counts; ascii: at least a digit and a space per
+    // value, the file's last value without its space): a count beyond the bytes left is a wrong count, not a
+    // reason to allocate or to loop. An element of no properties takes none, and so has no count to read.
+    if (e.properties.empty() && e.count > 0)
+      body.fail("the header declares " + std::to_string(e.count) + " '" + e.name +
+                "' elements but no properties for them (a broken header)");
     std::size_t minBytes = 0;
     for (const PlyProperty& p : e.properties) minBytes += p.isList ? plySize(p.countType) : plySize(p.type);
-    if (body.ascii()) minBytes = 2 * e.properties.size();  // at least a digit and a space per value
-    if (minBytes > 0 && e.count > (size - bodyStart) / minBytes)
+    if (body.ascii()) minBytes = 2 * e.properties.size();
+    const std::size_t left = body.left();
+    if (minBytes > 0 && e.count > (left + (body.ascii() ? 1 : 0)) / minBytes)
       body.fail("the header declares " + std::to_string(e.count) + " '" + e.name + "' elements of at least " +
-                std::to_string(minBytes) + " bytes, but only " + std::to_string(size - bodyStart) +
-                " bytes follow the header (truncated file or wrong count)");
+                std::to_string(minBytes) + " bytes, but only " + std::to_string(left) +
+                " bytes are left (truncated file or wrong count)");
     const bool isVertex = e.name == "vertex", isFace = e.name == "face";
     int xyz[3] = {-1, -1, -1}, indices = -1;
     for (int i = 0; i < static_cast<int>(e.properties.size()); ++i) {
@@ -504,17 +712,17 @@ RawMesh readPly(const std::uint8_t* data, std::size_t size, const std::string& n
     }
     if (isVertex) {
       if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0) fail(name, "the vertex element lacks an x, y or z property");
-      mesh.xyz.resize(3 * e.count);
+      mesh.xyz.resize(3 * static_cast<std::size_t>(e.count));
       sawVertex = true;
     }
     if (isFace) {
       if (indices < 0) fail(name, "the face element has no vertex_indices list");
       if (!plyIsInteger(e.properties[indices].type)) fail(name, "face vertex indices must have an integer type");
-      mesh.tri.reserve(3 * e.count);
+      mesh.tri.reserve(3 * static_cast<std::size_t>(e.count));
       sawFace = true;
     }
     std::vector<int> ids;
-    for (std::size_t i = 0; i < e.count; ++i) {
+    for (std::uint64_t i = 0; i < e.count; ++i) {
       body.at(e.name, i);
       for (int k = 0; k < static_cast<int>(e.properties.size()); ++k) {
         const PlyProperty& p = e.properties[k];
@@ -529,13 +737,17 @@ RawMesh readPly(const std::uint8_t* data, std::size_t size, const std::string& n
         }
         const double n = body.value(p.countType, "the list length");
         if (n < 0) body.fail("negative list length in " + body.where());
+        // Each item takes at least a byte (binary: its size): a longer list than the bytes left is a wrong length.
+        if (n > static_cast<double>(body.left() / (body.ascii() ? 1 : plySize(p.type))))
+          body.fail("the list of " + body.where() + " declares " + std::to_string(static_cast<long long>(n)) + " items, but only " +
+                    std::to_string(body.left()) + " bytes are left (truncated file or wrong length)");
         const bool keep = isFace && k == indices;
         if (keep) {
-          if (n < 3) body.fail(body.where() + " has " + std::to_string(static_cast<long>(n)) + " vertices (at least 3 needed)");
+          if (n < 3) body.fail(body.where() + " has " + std::to_string(static_cast<long long>(n)) + " vertices (at least 3 needed)");
           if (!sawVertex) fail(name, "the face element comes before the vertex element");
           ids.clear();
         }
-        for (long j = 0; j < static_cast<long>(n); ++j) {
+        for (long long j = 0; j < static_cast<long long>(n); ++j) {
           const double x = body.value(p.type, "a list item");
           if (!keep) continue;
           if (x < 0 || x >= mesh.vertexCount())
@@ -544,7 +756,7 @@ RawMesh readPly(const std::uint8_t* data, std::size_t size, const std::string& n
           ids.push_back(static_cast<int>(x));
         }
         if (keep) {
-          triangulatePolygon(ids, mesh.xyz.data(), mesh.tri);
+          if (!triangulatePolygon(ids, mesh.xyz.data(), mesh.tri)) body.fail(body.where() + " of " + convolutedPolygon(ids.size()));
           checkTriangleLimit(name, mesh.tri.size() / 3);
         }
       }
@@ -718,8 +930,16 @@ TriMesh cleanTriMesh(const TriMesh& raw, const std::string& name, MeshReadReport
   if (nfIn == 0) fail(name, "has no faces");
   checkTriangleLimit(name, static_cast<std::size_t>(nfIn));
   checkVertexLimit(name, static_cast<std::size_t>(nv));
-  for (int v = 0; v < nv; ++v)
+  for (int v = 0; v < nv; ++v) {
     if (!raw.V.row(v).allFinite()) fail(name, "vertex " + std::to_string(v) + " has a coordinate that is not finite");
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(raw.V(v, a)) > kMaxMeshCoordinate) {
+        char value[64];
+        std::snprintf(value, sizeof value, "%.9g", raw.V(v, a));
+        fail(name, "vertex " + std::to_string(v) + " " + formatPoint(&raw.V(v, 0)) + " has " + "xyz"[a] + " = " + value +
+                       ", beyond ±1e50: the extent of the mesh and the products of its lengths must stay finite");
+      }
+  }
   auto point = [&](int v) -> Vec3 { return raw.V.row(v).transpose(); };
 
   // Degenerate triangles carry no surface: drop them (counted), as long as something is left.
@@ -743,29 +963,30 @@ TriMesh cleanTriMesh(const TriMesh& raw, const std::string& name, MeshReadReport
   const int nf = static_cast<int>(tri.size() / 3);
   if (nf == 0) fail(name, "all " + std::to_string(nfIn) + " triangles are degenerate (a repeated vertex or zero area)");
 
-  // Neighbour across each edge; an edge in three or more triangles is non-manifold.
+  // Neighbour across each edge, from the corners sorted by their edge (so that a vertex in many triangles, a
+  // fan's hub, costs no more than any other); an edge in three or more triangles is non-manifold.
   const VertexCorners around(tri, nv);
-  std::vector<int> neighbour(tri.size(), -1);
+  std::vector<std::pair<std::uint64_t, int>> edges(tri.size());
   for (int c = 0; c < 3 * nf; ++c) {
-    const int f = c / 3, a = tri[c], b = tri[3 * f + (c + 1) % 3];
-    int count = 0, other = -1;
-    for (int i = around.start[a]; i < around.start[a + 1]; ++i) {
-      const int g = around.corner[i] / 3;
-      if (tri[3 * g] != b && tri[3 * g + 1] != b && tri[3 * g + 2] != b) continue;
-      ++count;
-      if (g != f) other = g;
-    }
-    if (count > 2) {
-      std::string faces;
-      for (int i = around.start[a]; i < around.start[a + 1]; ++i) {
-        const int g = around.corner[i] / 3;
-        if (tri[3 * g] == b || tri[3 * g + 1] == b || tri[3 * g + 2] == b) faces += (faces.empty() ? "" : ", ") + std::to_string(g);
-      }
-      fail(name, "non-manifold edge between vertices " + std::to_string(a) + " " + formatPoint(&raw.V(a, 0)) + " and " +
-                     std::to_string(b) + " " + formatPoint(&raw.V(b, 0)) + ": it belongs to " + std::to_string(count) +
-                     " triangles (" + faces + "), at most 2 allowed");
-    }
-    neighbour[c] = other;
+    const std::uint64_t a = static_cast<std::uint32_t>(tri[c]), b = static_cast<std::uint32_t>(tri[3 * (c / 3) + (c + 1) % 3]);
+    edges[c] = {std::min(a, b) << 32 | std::max(a, b), c};
+  }
+  std::sort(edges.begin(), edges.end());
+  std::vector<int> neighbour(tri.size(), -1);
+  std::size_t crowded = edges.size();  // the group of the first corner whose edge is in three triangles or more
+  for (std::size_t i = 0, j; i < edges.size(); i = j) {
+    for (j = i + 1; j < edges.size() && edges[j].first == edges[i].first;) ++j;
+    if (j - i == 2) neighbour[edges[i].second] = edges[i + 1].second / 3, neighbour[edges[i + 1].second] = edges[i].second / 3;
+    if (j - i > 2 && (crowded == edges.size() || edges[i].second < edges[crowded].second)) crowded = i;
+  }
+  if (crowded < edges.size()) {
+    const int c = edges[crowded].second, a = tri[c], b = tri[3 * (c / 3) + (c + 1) % 3];
+    std::string faces;
+    std::size_t j = crowded;
+    for (; j < edges.size() && edges[j].first == edges[crowded].first; ++j) faces += (faces.empty() ? "" : ", ") + std::to_string(edges[j].second / 3);
+    fail(name, "non-manifold edge between vertices " + std::to_string(a) + " " + formatPoint(&raw.V(a, 0)) + " and " +
+                   std::to_string(b) + " " + formatPoint(&raw.V(b, 0)) + ": it belongs to " + std::to_string(j - crowded) +
+                   " triangles (" + faces + "), at most 2 allowed");
   }
   // Does triangle g traverse the edge a->b in the same direction as a triangle holding a->b?
   auto sameDirection = [&](int g, int a, int b) {
@@ -913,8 +1134,8 @@ TriMesh readMesh(const std::string& path, MeshReadReport* report) {
   if (!in) throw Error(ErrorCode::Io, "cannot open mesh file '" + path + "' (does it exist and is it readable?)");
   const std::streamoff size = in.tellg();
   if (size < 0) throw Error(ErrorCode::Io, "cannot read mesh file '" + path + "'");
-  if (static_cast<std::size_t>(size) > kMaxMeshFileBytes)
-    fail(path, std::to_string(static_cast<std::size_t>(size) >> 20) + " MiB is more than phex reads (" +
+  if (static_cast<std::uint64_t>(size) > kMaxMeshFileBytes)
+    fail(path, std::to_string(static_cast<std::uint64_t>(size) >> 20) + " MiB is more than phex reads (" +
                    std::to_string(kMaxMeshFileBytes >> 20) + " MiB)");
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
   in.seekg(0);

@@ -10,6 +10,7 @@
 
 #include "phex/dupin.hpp"
 #include "phex/error.hpp"
+#include "phex/mesh_io.hpp"
 #include "phex/parallel.hpp"
 
 namespace phex {
@@ -384,6 +385,8 @@ MeshSurface::MeshSurface(TriMesh mesh, std::string name) : mesh_(std::move(mesh)
   const int nv = vertexCount(), nf = static_cast<int>(mesh_.F.rows());
   if (nf == 0) fail(name_, "has no triangles");
   if (!mesh_.V.allFinite()) fail(name_, "has a coordinate that is not finite");
+  if (nv > 0 && !(mesh_.V.cwiseAbs().maxCoeff() <= kMaxMeshCoordinate))
+    fail(name_, "has a coordinate beyond ±1e50 (the extent of the mesh and the products of its lengths must stay finite)");
   if (mesh_.F.minCoeff() < 0 || mesh_.F.maxCoeff() >= nv)
     fail(name_, "a triangle refers to a vertex out of range (" + std::to_string(nv) + " vertices)");
   for (int v = 0; v < nv; ++v) bounds_.extend(Vec3(mesh_.V.row(v).transpose()));
@@ -393,7 +396,7 @@ MeshSurface::MeshSurface(TriMesh mesh, std::string name) : mesh_(std::move(mesh)
   if (noise_ > kNoisyMesh) {
     // The curvature noise goes as residual / radius^2 / sqrt(points), about 1 / rings^3: rings to bring it
     // down to what 2 rings give at kNoisyMesh.
-    curvatureRings_ = std::clamp(static_cast<int>(std::ceil(2 * std::cbrt(noise_ / kNoisyMesh))), 3, 8);
+    curvatureRings_ = static_cast<int>(std::clamp(std::ceil(2 * std::cbrt(noise_ / kNoisyMesh)), 3.0, 8.0));
     estimateCurvature(curvatureRings_);
   }
   // A developable (an uploaded barrel vault, cone, ...): the curvature that vanishes comes out of the fits as
@@ -473,8 +476,26 @@ void MeshSurface::buildTopology() {
   std::vector<int> boundaryNext(nv, -1);
   onBoundary_.assign(nv, 0);
   std::vector<int> ring;
+  // The edges out of and into a vertex by their other end (with their triangle), counted by binary search: a
+  // vertex in many triangles (a fan's hub) costs d log d, not d^2.
+  std::vector<std::pair<int, int>> out, in;
+  auto count = [](const std::vector<std::pair<int, int>>& edges, int b) {
+    return std::equal_range(edges.begin(), edges.end(), std::pair(b, 0),
+                            [](const std::pair<int, int>& x, const std::pair<int, int>& y) { return x.first < y.first; });
+  };
   for (int a = 0; a < nv; ++a) {
     ring.clear();
+    out.clear();
+    in.clear();
+    for (int i = start[a]; i < start[a + 1]; ++i) {
+      const int f = around[i];
+      int k = 0;
+      while (mesh_.F(f, k) != a) ++k;
+      out.emplace_back(mesh_.F(f, (k + 1) % 3), f);
+      in.emplace_back(mesh_.F(f, (k + 2) % 3), f);
+    }
+    std::sort(out.begin(), out.end());
+    std::sort(in.begin(), in.end());
     for (int i = start[a]; i < start[a + 1]; ++i) {
       const int f = around[i];
       int k = 0;
@@ -482,14 +503,9 @@ void MeshSurface::buildTopology() {
       const int b = mesh_.F(f, (k + 1) % 3);
       ring.push_back(b);
       ring.push_back(mesh_.F(f, (k + 2) % 3));
-      int forward = 0, backward = 0, twin = -1;
-      for (int j = start[a]; j < start[a + 1]; ++j) {
-        const int g = around[j];
-        for (int c = 0; c < 3; ++c) {
-          forward += mesh_.F(g, c) == a && mesh_.F(g, (c + 1) % 3) == b;
-          if (mesh_.F(g, c) == b && mesh_.F(g, (c + 1) % 3) == a) ++backward, twin = g;
-        }
-      }
+      const auto forwards = count(out, b), backwards = count(in, b);
+      const long forward = forwards.second - forwards.first, backward = backwards.second - backwards.first;
+      const int twin = backward > 0 ? (backwards.second - 1)->second : -1;
       if (backward == 1 && forward == 1 && a < b) noteCrease(f, twin, a, b, turns);
       if (forward > 1 || backward > 1)
         fail(name_, "the edge from vertex " + std::to_string(a) + " to " + std::to_string(b) +
@@ -544,11 +560,15 @@ MeshSurface::VertexFit MeshSurface::fitVertex(int v, int minRings, const Vec3& t
   std::size_t ringBegin = 0;
   for (int rings = 1; rings <= 8; ++rings) {
     const std::size_t ringEnd = scratch.patch.size();
-    for (std::size_t i = ringBegin; i < ringEnd; ++i)
-      for (int j = neighbourStart_[scratch.patch[i]]; j < neighbourStart_[scratch.patch[i] + 1]; ++j) {
+    for (std::size_t i = ringBegin; i < ringEnd; ++i) {
+      const int u = scratch.patch[i];
+      // Not on through a hub (a fan's centre): its neighbours would be every neighbour's ring, all of the mesh.
+      if (u != v && neighbourStart_[u + 1] - neighbourStart_[u] > kCrowdedVertex) continue;
+      for (int j = neighbourStart_[u]; j < neighbourStart_[u + 1]; ++j) {
         const int w = neighbours_[j];
         if (scratch.stamp[w] != v) scratch.stamp[w] = v, scratch.patch.push_back(w);
       }
+    }
     ringBegin = ringEnd;
     if (scratch.patch.size() == ringEnd || (rings >= minRings && static_cast<int>(scratch.patch.size()) >= kMinJetPoints)) break;
   }
@@ -938,13 +958,12 @@ void MeshSurface::buildGrid() {
           fn(i + std::size_t(gridSize_[0]) * (j + std::size_t(gridSize_[1]) * k));
         }
   };
-  for (int attempt = 0;; ++attempt, h *= 1.5) {
-    double cells = 1;
-    for (int a = 0; a < 3; ++a) {
-      gridSize_[a] = std::max(1, static_cast<int>(std::ceil(size(a) / h)));
-      cells *= gridSize_[a];
-    }
-    if (cells > maxCells && attempt < 200) continue;
+  // Ends: once h passes the mesh's size (finite: kMaxMeshCoordinate) there is one cell holding every triangle once.
+  for (;; h *= 1.5) {
+    double cells = 1, count[3];
+    for (int a = 0; a < 3; ++a) cells *= count[a] = std::max(1.0, std::ceil(size(a) / h));
+    if (!(cells <= maxCells)) continue;  // counted in floating point: cast once they fit an int
+    for (int a = 0; a < 3; ++a) gridSize_[a] = static_cast<int>(count[a]);
     gridCell_ = h;
     gridInverseCell_ = 1 / h;
     gridOrigin_ = bounds_.min();
@@ -956,15 +975,12 @@ void MeshSurface::buildGrid() {
       Box3 box;
       for (int k = 0; k < 3; ++k) box.extend(Vec3(mesh_.V.row(mesh_.F(f, k)).transpose()));
       for (int a = 0; a < 3; ++a) {
-        const int lo = static_cast<int>(std::floor((box.min()(a) - grow - gridOrigin_(a)) * gridInverseCell_));
-        const int hi = static_cast<int>(std::floor((box.max()(a) + grow - gridOrigin_(a)) * gridInverseCell_));
-        range[f][a] = std::clamp(lo, 0, gridSize_[a] - 1);
-        range[f][a + 3] = std::clamp(hi, 0, gridSize_[a] - 1);
+        range[f][a] = gridCellOf(box.min()(a) - grow, a);
+        range[f][a + 3] = gridCellOf(box.max()(a) + grow, a);
       }
       forCells(f, range[f], [&](std::size_t) { ++entries; });
     }
-    if (entries > maxEntries && attempt < 200) continue;
-    break;
+    if (entries <= maxEntries) break;
   }
   spheres_.resize(nf);
   for (int f = 0; f < nf; ++f) {
@@ -983,12 +999,13 @@ void MeshSurface::buildGrid() {
   for (int f = 0; f < nf; ++f) forCells(f, range[f], [&](std::size_t c) { cellTriangles_[fill[c]++] = f; });
 }
 
+int MeshSurface::gridCellOf(double x, int axis) const {
+  return gridCell((x - gridOrigin_(axis)) * gridInverseCell_, gridSize_[axis]);
+}
+
 bool MeshSurface::searchGrid(const Vec3& p, double& best, int& triangle, Vec3& barycentric) const {
   int centre[3];
-  for (int a = 0; a < 3; ++a) {
-    const double q = std::floor((p(a) - gridOrigin_(a)) * gridInverseCell_);
-    centre[a] = q < 0 ? 0 : q >= gridSize_[a] ? gridSize_[a] - 1 : static_cast<int>(q);
-  }
+  for (int a = 0; a < 3; ++a) centre[a] = gridCellOf(p(a), a);
   auto cellId = [&](int i, int j, int k) { return i + std::size_t(gridSize_[0]) * (j + std::size_t(gridSize_[1]) * k); };
   double bestRoot = std::sqrt(best);
   Vec3 bary;
@@ -1025,10 +1042,8 @@ bool MeshSurface::searchGrid(const Vec3& p, double& best, int& triangle, Vec3& b
   const double reach = bestRoot * (1 + 1e-9) + 1e-6 * gridCell_;
   int lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
-    const double l = std::floor((p(a) - reach - gridOrigin_(a)) * gridInverseCell_);
-    const double h = std::floor((p(a) + reach - gridOrigin_(a)) * gridInverseCell_);
-    lo[a] = l < 0 ? 0 : l >= gridSize_[a] ? gridSize_[a] - 1 : static_cast<int>(l);
-    hi[a] = h < 0 ? 0 : h >= gridSize_[a] ? gridSize_[a] - 1 : static_cast<int>(h);
+    lo[a] = gridCellOf(p(a) - reach, a);
+    hi[a] = gridCellOf(p(a) + reach, a);
     if (hi[a] - lo[a] > 4) return false;
   }
   for (int k = lo[2]; k <= hi[2]; ++k)

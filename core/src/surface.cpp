@@ -138,7 +138,7 @@ void ParametricSurface::ensureSeeds() const {
 
 Eigen::Vector3i ParametricSurface::SeedGrid::cellOf(const Vec3& p) const {
   Eigen::Vector3i c;
-  for (int a = 0; a < 3; ++a) c[a] = std::clamp(static_cast<int>(std::floor((p[a] - origin[a]) / cell)), 0, dims[a] - 1);
+  for (int a = 0; a < 3; ++a) c[a] = gridCell((p[a] - origin[a]) / cell, dims[a]);
   return c;
 }
 

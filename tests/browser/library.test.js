@@ -43,6 +43,12 @@ test('in a browser the core runs in a worker: run, cancel, memory, errors, dispo
     const bad = await phex.run({ surface: 'torus', surfaceParams: { r: 3 } }).then(() => 'resolved', (e) => `${e.name} ${e.code} ${e.message}`);
     const preview = await phex.surfacePreview({ surface: 'torus' }).then(() => 'resolved', (e) => e.code);
     const capabilities = phex.capabilities();
+    // The core trapping (as a file that slips through could make it) takes down the worker, not the page.
+    const trapped = [];
+    for (const kind of ['unreachable', 'abort', 'memory']) {
+      trapped.push(await phex.debugTrap(kind).then(() => 'resolved', (e) => `${e.name} ${e.code}`));
+      trapped.push((await phex.run({ surface: 'sphere', faces: 100 })).metrics.planarityMax <= 1e-9);
+    }
     phex.dispose();
     const disposed = await phex.run({ surface: 'torus' }).then(() => 'resolved', (e) => e.code);
     return {
@@ -56,6 +62,7 @@ test('in a browser the core runs in a worker: run, cancel, memory, errors, dispo
       bad,
       preview,
       capabilities,
+      trapped,
       disposed,
     };
   });
@@ -67,5 +74,6 @@ test('in a browser the core runs in a worker: run, cancel, memory, errors, dispo
   assert.ok(out.afterFaces > 100);
   assert.match(out.bad, /^PHexError invalid_parameter .*\br\b/);
   assert.equal(out.preview, out.capabilities.surfacePreview ? 'resolved' : 'unsupported');
+  assert.deepEqual(out.trapped, Array(3).fill(['PHexError internal', true]).flat());
   assert.equal(out.disposed, 'cancelled');
 });

@@ -252,6 +252,33 @@ test('curvature of an uploaded mesh keeps the vertex order; bad files are named'
   assert.ok(!existsSync(join(dir, 'bad.csv')) || readFileSync(join(dir, 'bad.csv'), 'utf8') === '');
 });
 
+test("fuzzing's files are refused within a second (exit 1, naming the problem); a 40,000-corner cap is read", () => {
+  const regressions = JSON.parse(readFileSync(new URL('../fuzz/regressions.json', import.meta.url), 'utf8'));
+  for (const [file, message] of Object.entries(regressions).filter(([f]) => f !== '//')) {
+    const path = new URL(`../fuzz/regressions/${file}`, import.meta.url).pathname;
+    for (const command of ['run', 'curvature']) {
+      const started = performance.now();
+      const r = phex(command, '--mesh', path, '--out', join(dir, 'refused.out'));
+      const ms = performance.now() - started;
+      assert.equal(r.code, 1, `${command} ${file}: ${r.err}`);
+      assert.ok(r.err.includes(file) && r.err.includes(message), r.err);
+      assert.ok(ms < 1000, `${command} ${file}: ${ms} ms`);
+    }
+  }
+  // One face of 40,000 corners (a flat cap as CAD tools write it): ear-clipped in near-linear time.
+  const n = 40000;
+  let cap = '';
+  for (let i = 0; i < n; i++) cap += `v ${Math.cos((2 * Math.PI * i) / n).toFixed(6)} ${Math.sin((2 * Math.PI * i) / n).toFixed(6)} 0\n`;
+  cap += `f ${Array.from({ length: n }, (_, i) => i + 1).join(' ')}\n`;
+  const input = join(dir, 'cap.obj'), out = join(dir, 'cap.csv');
+  writeFileSync(input, cap);
+  const started = performance.now();
+  const r = phex('curvature', '--mesh', input, '--out', out);
+  assert.equal(r.code, 0, r.err);
+  assert.equal(readFileSync(out, 'utf8').trim().split('\n').length, n + 1);
+  assert.ok(performance.now() - started < 10000, `${performance.now() - started} ms`);  // was over a minute
+});
+
 test('curvature of an analytic surface is exact', () => {
   const out = join(dir, 'sphere.csv');
   assert.equal(phex('curvature', '--surface', 'sphere', '--param', 'R=2', '--faces', '200', '--out', out).code, 0);

@@ -228,7 +228,7 @@ TEST_CASE("mesh_io: truncated files") {
   checkInvalid([&] { readBinary(stl, "stl"); }, {"'test.stl'", "declares 4 triangles", "truncated"});
   std::vector<std::uint8_t> ply = tetraPly("binary_little_endian");
   ply.resize(ply.size() - 30);
-  checkInvalid([&] { readBinary(ply, "ply"); }, {"'test.ply' byte", "file ends inside extra 0"});
+  checkInvalid([&] { readBinary(ply, "ply"); }, {"'test.ply' byte", "2 'extra' elements", "only 2 bytes are left"});
   std::string off = tetraOff();
   off.resize(off.find("3 0 3 2"));
   checkInvalid([&] { readText(off, "off"); }, {"'test.off' line 10", "after 2 of the 4 faces"});
@@ -355,4 +355,95 @@ TEST_CASE("mesh_io: limits and unknown formats") {
   checkInvalid([&] { readText("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
                               "element face 30000000\nproperty list uchar int vertex_indices\nend_header\n", "ply"); },
                {"line 7", "more than 20000000 faces"});
+}
+
+// Files the fuzzers found (tests/fuzz/regressions): every number is range-checked before a cast, every count
+// bounded by the bytes left; each is refused at once with a message naming the problem.
+TEST_CASE("mesh_io: integers out of their range are refused before any cast") {
+  const std::string header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+  checkInvalid([&] { readText(header + "3 9223372036854775807 0 0\n", "ply"); },
+               {"line 13", "a list item 9223372036854775807 of face 0 is out of range for its type int"});
+  checkInvalid([&] { readText(header + "3 99999999999999999999 0 0\n", "ply"); }, {"line 13", "99999999999999999999 is out of range"});
+  checkInvalid([&] { readText(header + "3 -1 0 1\n", "ply"); }, {"vertex index -1 is out of range"});
+  checkInvalid([&] { readText(header + "9223372036854775807 0 1 2\n", "ply"); },
+               {"line 13", "the list length 9223372036854775807 of face 0 is out of range for its type uchar"});
+  std::string wide = header;
+  wide.replace(wide.find("uchar"), 5, "uint");
+  checkInvalid([&] { readText(wide + "4294967295 0 1 2\n", "ply"); }, {"declares 4294967295 items", "bytes are left"});
+  checkInvalid([&] { readText("OFF\n99999999999999999999 1 0\n", "off"); }, {"line 2", "vertex count 99999999999999999999 is out of range"});
+  // A relative OBJ index of LONG_MIN reaches before the first vertex, with more vertices after it or not.
+  const std::string five = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 0\n";
+  for (const std::string& after : {std::string(), five})
+    checkInvalid([&] { readText(five + "f 1 2 3 -9223372036854775808\n" + after, "obj"); },
+                 {"line 6", "relative vertex index -9223372036854775808 reaches before the first vertex (5 defined so far)"});
+  checkInvalid([&] { readText(five + "f 1 2 -99999999999999999999\n", "obj"); }, {"line 6", "is out of range"});
+}
+
+TEST_CASE("mesh_io: counts are bounded by the bytes left, also for elements of nothing") {
+  for (const char* format : {"ascii", "binary_little_endian"}) {
+    INFO(format);
+    const std::string ply = std::string("ply\nformat ") + format + " 1.0\nelement e 9223372036854775807\nend_header\n";
+    checkInvalid([&] { readText(ply, "ply"); }, {"declares 9223372036854775807 'e' elements but no properties"});
+  }
+  // An element of no properties and no count is harmless.
+  const std::string tri = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                          "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  CHECK(readText("ply\nformat ascii 1.0\nelement nothing 0\n" + tri, "ply").F.rows() == 1);
+  checkInvalid([&] { readText("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n" + tri, "ply"); },
+               {"a second 'vertex' element"});
+  // Counts are checked against the bytes left after the elements before them; list lengths too.
+  auto binaryTriangle = [](const std::string& faces, const std::string& countType) {
+    Bytes b;
+    b.text("ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+           "element face " + faces + "\nproperty list " + countType + " int vertex_indices\nend_header\n");
+    for (float c : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) b.put(c);
+    return b;
+  };
+  Bytes twoFaces = binaryTriangle("2", "uchar");
+  twoFaces.put(std::uint8_t(3));
+  checkInvalid([&] { readBinary(twoFaces.data, "ply"); }, {"declares 2 'face' elements of at least 1 bytes, but only 1 bytes are left"});
+  Bytes longList = binaryTriangle("1", "uint");
+  longList.put(std::uint32_t(0xffffffffu));
+  longList.put(std::int32_t(0));
+  checkInvalid([&] { readBinary(longList.data, "ply"); }, {"face 0", "declares 4294967295 items, but only 4 bytes are left"});
+}
+
+TEST_CASE("mesh_io: coordinates beyond ±1e50 are refused, naming the vertex") {
+  // Two triangles, one near x = +1e308 and one near x = -1e308: their extent overflows to infinity.
+  const std::string far = "v 1e308 0 0\nv 1e308 1 0\nv 1e308 0 1\nv -1e308 0 0\nv -1e308 1 0\nv -1e308 0 1\nf 1 2 3\nf 4 5 6\n";
+  checkInvalid([&] { readText(far, "obj"); }, {"'test.obj'", "vertex 0 (1e+308, 0, 0) has x = 1e+308, beyond ±1e50"});
+  checkInvalid([&] { readText("OFF\n3 1 0\n0 0 0\n1 -2e50 0\n0 1 0\n3 0 1 2\n", "off"); }, {"vertex 1", "y = -2e+50"});
+  // Up to the limit a mesh is read as it is.
+  CHECK(readText("v 1e50 0 0\nv 1e50 1 0\nv 1e50 0 1\nv -1e50 0 0\nv -1e50 1 0\nv -1e50 0 1\nf 1 2 3\nf 4 5 6\n", "obj").V.rows() == 6);
+}
+
+TEST_CASE("mesh_io: a polygon of 40,000 corners is ear-clipped in near-linear time, without a fan") {
+  // A flat cap (a circle) as CAD tools write it, and a star whose every other corner is reflex.
+  const int n = 40000;
+  for (const double dent : {0.0, 0.3}) {
+    INFO("dent " << dent);
+    std::string obj;
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * 3.141592653589793 * i / n, r = 1 - dent * (i % 2);
+      obj += "v " + std::to_string(r * std::cos(a)) + " " + std::to_string(r * std::sin(a)) + " 0\n";
+    }
+    obj += "f";
+    for (int i = 1; i <= n; ++i) obj += " " + std::to_string(i);
+    obj += "\n";
+    const TriMesh m = readText(obj, "obj");
+    REQUIRE(m.F.rows() == n - 2);
+    std::vector<int> valence(n, 0);
+    double area = 0, outline = 0;
+    for (int f = 0; f < m.F.rows(); ++f) {
+      const double a = (m.V.row(m.F(f, 1)) - m.V.row(m.F(f, 0))).cross(m.V.row(m.F(f, 2)) - m.V.row(m.F(f, 0)))(2) / 2;
+      CHECK(a > 0);
+      area += a;
+      for (int k = 0; k < 3; ++k) ++valence[m.F(f, k)];
+    }
+    for (int i = 0; i < n; ++i) outline += (m.V(i, 0) * m.V((i + 1) % n, 1) - m.V((i + 1) % n, 0) * m.V(i, 1)) / 2;
+    CHECK(area == Approx(outline).epsilon(1e-9));
+    // A fan from one corner (what clipping the first ear over and over gives) would meet n - 2 triangles there.
+    CHECK(*std::max_element(valence.begin(), valence.end()) < 64);
+  }
 }

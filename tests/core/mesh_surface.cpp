@@ -299,6 +299,8 @@ TEST_CASE("mesh_surface: bad meshes are rejected with a message") {
   m.F << 0, 1, 2;
   m.V(2, 2) = std::nan("");
   CHECK_THROWS_WITH(MeshSurface(m), Catch::Contains("not finite"));
+  m.V(2, 2) = 1e308;  // finite, but no extent or product of lengths would be
+  CHECK_THROWS_WITH(MeshSurface(m), Catch::Contains("beyond ±1e50"));
   m.V(2, 2) = 0;
   m.F.resize(2, 3);
   m.F << 0, 1, 2, 0, 1, 2;  // the same triangle twice: every edge used twice in one direction
@@ -411,6 +413,38 @@ TEST_CASE("mesh_surface: the closest point is the nearest over all triangles, ne
       CHECK((got - p).norm() == Approx((expected - p).norm()).margin(1e-12 * diagonal));
     }
   }
+}
+
+TEST_CASE("mesh_surface: small triangles far apart (a grid of 1e100 edges across) still find their closest points") {
+  // Two unit triangles at x = +-1e49: the grid's cell count is sized in floating point, then cast.
+  TriMesh m;
+  m.V.resize(6, 3);
+  m.V << 1e49, 0, 0, 1e49, 1, 0, 1e49, 0, 1, -1e49, 0, 0, -1e49, 1, 0, -1e49, 0, 1;
+  m.F.resize(2, 3);
+  m.F << 0, 1, 2, 3, 5, 4;
+  const MeshSurface s(m, "far");
+  for (const double side : {1.0, -1.0}) {
+    const LocalGeometry g = s.closestPoint(Vec3(side * 1e49, 0.25, 0.25));
+    CHECK(g.point.x() == Approx(side * 1e49));
+    CHECK(g.point.y() == Approx(0.25));
+  }
+  // A point that is no point (NaN) gets some answer on the mesh, never a read out of the grid.
+  CHECK(std::abs(s.closestPoint(Vec3(std::nan(""), 0, 0)).point.x()) == Approx(1e49));
+}
+
+TEST_CASE("mesh_surface: a fan of 40,000 triangles (a cap as CAD tools triangulate it) is read in linear time") {
+  // Its hub neighbours every vertex: patches grown through it would each be the whole mesh (minutes, not ms).
+  const int n = 40000;
+  TriMesh fan;
+  fan.V.resize(n + 1, 3);
+  fan.V.row(0) << 0, 0, 0;
+  for (int i = 0; i < n; ++i) fan.V.row(i + 1) << std::cos(2 * M_PI * i / n), std::sin(2 * M_PI * i / n), 0;
+  fan.F.resize(n, 3);
+  for (int i = 0; i < n; ++i) fan.F.row(i) << 0, i + 1, (i + 1) % n + 1;
+  const MeshSurface s(fan, "fan");
+  CHECK(s.planar());
+  CHECK(s.boundaryLoops().size() == 1);
+  CHECK((s.closestPoint(Vec3(0.5, 0.1, 1)).point - Vec3(0.5, 0.1, 0)).norm() < 1e-9);  // thin triangles: round-off
 }
 
 TEST_CASE("mesh_surface: a noisy mesh is recognized and its curvature fitted over wider rings") {

@@ -2,6 +2,7 @@
 // or its position, and the instance keeps working afterwards.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
+import { readFileSync } from 'node:fs';
 import { createPHex, PHexError } from '../../build/pkg/phex.js';
 
 const phex = await createPHex({ worker: false });
@@ -52,4 +53,34 @@ test('after refused files a good mesh still works: the octahedron as a subdivisi
   assert.equal(r.metrics.selfIntersectingCount, 0);
   const preview = await phex.surfacePreview({ mesh: text(octahedron), meshFormat: 'obj', meshName: 'octahedron.obj' });
   assert.equal(preview.k1.length, 6);
+});
+
+// The files fuzzing found (tests/fuzz/regressions.json): each refused at once, naming its problem.
+const regressions = Object.entries(JSON.parse(readFileSync(new URL('../fuzz/regressions.json', import.meta.url)))).filter(([f]) => f !== '//');
+
+for (const [file, message] of regressions) {
+  test(`fuzzing's ${file} is refused within a second, naming the problem`, async () => {
+    const bytes = new Uint8Array(readFileSync(new URL(`../fuzz/regressions/${file}`, import.meta.url)));
+    const started = performance.now();
+    await assert.rejects(phex.run({ mesh: bytes, meshFormat: file.split('.').pop(), meshName: file }), (e) => {
+      assert.ok(e instanceof PHexError, String(e));
+      assert.equal(e.code, 'invalid_input', e.message);
+      assert.ok(e.message.includes(`'${file}'`) && e.message.includes(message), e.message);
+      return true;
+    });
+    assert.ok(performance.now() - started < 1000, `${file}: ${performance.now() - started} ms`);
+  });
+}
+
+test('a trap or an abort in the core (a file that slips through) is a PHexError, and the next run works', async () => {
+  for (const kind of ['unreachable', 'abort', 'memory']) {
+    await assert.rejects(phex.debugTrap(kind), (e) => {
+      assert.ok(e instanceof PHexError, `${kind}: ${e}`);
+      assert.equal(e.code, 'internal');
+      assert.match(e.message, /the phex core failed/);
+      return true;
+    });
+    const r = await phex.run({ mesh: text(octahedron), meshFormat: 'obj', meshName: 'octahedron.obj', method: 'subdivision', faces: 100 });
+    assert.ok(r.metrics.planarityMax <= 1e-9, kind);
+  }
 });

@@ -423,6 +423,15 @@ class PHex {
     }).then((value) => value.text);
   }
 
+  /**
+   * Test-only: makes the core fail as a bug in it would ('unreachable': a wasm trap, 'abort', 'memory': a read
+   * past the heap). Rejects with a PHexError 'internal'; the next call runs on a fresh core.
+   * @internal
+   */
+  debugTrap(kind = 'unreachable') {
+    return this.#enqueue(() => this.#backend.call('debugTrap', [kind]));
+  }
+
   dispose() {
     this.#disposed = true;
     this.#backend.dispose();

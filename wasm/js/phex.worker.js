@@ -68,6 +68,11 @@ export async function loadEngine() {
     structure(mesh, options) {
       return answer(core.structure(mesh, options));
     },
+    /** Test-only: the core fails as a bug in it would (see PHex.debugTrap). */
+    debugTrap(kind) {
+      core.debugTrap(kind);
+      return { ok: true };
+    },
     /** Lets the last upload's surface go (see PHex.clearUploadCache). */
     clearUploadCache() {
       if (typeof core.clearUploadCache === 'function') core.clearUploadCache();
@@ -96,7 +101,7 @@ function serve() {
     ({ version, surfaces, capabilities }) => postMessage({ type: 'ready', info: { version, surfaces, capabilities } }),
     (error) => postMessage({ type: 'failed', message: `could not load the phex wasm module: ${error?.message ?? error}` }),
   );
-  const METHODS = ['run', 'surfacePreview', 'memory', 'fabrication', 'structure', 'clearUploadCache'];
+  const METHODS = ['run', 'surfacePreview', 'memory', 'fabrication', 'structure', 'clearUploadCache', 'debugTrap'];
   addEventListener('message', async ({ data }) => {
     if (data?.type !== 'call' || !METHODS.includes(data.method)) return;
     const engine = await ready;

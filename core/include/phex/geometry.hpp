@@ -12,6 +12,14 @@ using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
 using Box3 = Eigen::AlignedBox3d;
 
+// The cell of a grid of n cells along an axis that holds coordinate x (in cells from the grid's origin):
+// floor(x) clamped to [0, n) in floating point before the cast, NaN to 0 (a double beyond int's range cast
+// to int is undefined behaviour, and points far off a grid or not finite reach grids from data).
+inline int gridCell(double x, int n) {
+  const double q = std::floor(x);
+  return q >= 0 ? (q < n ? static_cast<int>(q) : n - 1) : 0;
+}
+
 // Second-order local geometry of a surface at one point (§3).
 // Sign convention: a principal curvature is positive where the surface bends away from `normal`,
 // so a sphere of radius R with outward normals has k1 = k2 = 1/R.

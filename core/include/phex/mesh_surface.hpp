@@ -11,8 +11,9 @@ namespace phex {
 // A triangle mesh seen as a smooth surface:
 // - at each vertex, the shape operator is estimated by fitting a cubic jet z(x, y) (a degree-3 height
 //   function, falling back to degree 2 where too few points) in the frame of the vertex normal, over
-//   the smallest k-ring (k >= 2) with at least kMinJetPoints vertices, weighted by distance. The normal is
-//   re-estimated from the fit; boundary vertices fit their one-sided neighbourhood the same way. On a
+//   the smallest k-ring (k >= 2) with at least kMinJetPoints vertices (grown through no hub: kCrowdedVertex),
+//   weighted by distance. The normal is re-estimated from the fit; boundary vertices fit their one-sided
+//   neighbourhood the same way. On a
 //   noisy mesh (the vertices' median distance to their fitted jets over kNoisyMesh of the mean edge: a
 //   scan, jittered heights) the fits are redone over wider rings (noise()), since the noise's share of the
 //   curvature falls as the cube of the patch's radius;
@@ -29,6 +30,9 @@ class MeshSurface : public Surface {
  public:
   static constexpr int kMinJetPoints = 16;
   static constexpr int kCrowdedCell = 64;
+  // Jet patches grow through vertices of at most this many neighbours (a UV sphere's pole of 500 segments is
+  // one), not through a hub's (a fan-triangulated cap's centre, whose neighbours are the whole cap).
+  static constexpr int kCrowdedVertex = 512;
   // Median fit residual, relative to the mean edge, above which a mesh counts as noisy. Meshes sampled from
   // smooth surfaces stay under 1e-4 (lattices of the analytic surfaces, jittered or graded grids of height
   // fields, coarse ones); heights jittered by 12 % of an edge give 0.04.
@@ -130,6 +134,8 @@ class MeshSurface : public Surface {
   VertexFit fitVertex(int v, int minRings, const Vec3& trialNormal, FitScratch& scratch) const;
   void buildTree();
   void buildGrid();
+  // The grid cell holding coordinate x along `axis`, clamped to the grid (NaN: 0).
+  int gridCellOf(double x, int axis) const;
   // Squared distance from p to triangle f, and the barycentric coordinates of the nearest point on it.
   double triangleDistance(int f, const Vec3& p, Vec3& barycentric) const;
   // Lowers `best` (a squared distance) to the nearest triangle's, setting `triangle` and `barycentric`.
