@@ -67,7 +67,7 @@ class Extractor {
       checkCancel(cancel);
       label();
       if (round >= kMaxRounds) break;
-      const int changes = repair();
+      const int changes = repair(round);
       if (changes == 0) break;
       repairs += changes;
     }
@@ -366,7 +366,8 @@ class Extractor {
   }
 
   // One round of mending: returns how many sites were added or removed.
-  int repair() {
+  // One round of mending (the `round`-th): returns how many sites were added or removed.
+  int repair(int round) {
     const int ns = static_cast<int>(sites_.size()), nv = m_.vertexCount();
     std::vector<int> farthest(ns, -1), size(ns, 0);
     for (int v = 0; v < nv; ++v) {
@@ -408,8 +409,11 @@ class Extractor {
     std::vector<int> bad;
     std::vector<int> seeds;
     const TriMesh T = dual(bad, &seeds, &siteOf_);
+    // Split first; where that has not mended them by half the rounds (a region folded over a crease, where the
+    // field mesh's normals turn sharply), the site goes and its neighbours close over it.
     for (int s : bad)
-      if (!remove[s] && dist_[farthest[s]] > 0.25) addAt(farthest[s]);
+      if (round >= kMaxRounds / 2) remove[s] = 1;
+      else if (!remove[s] && dist_[farthest[s]] > 0.25) addAt(farthest[s]);
     // An interior site next to a boundary edge, nearer to it than kNearBoundaryEdge of its length: its triangle is a
     // sliver whose boundary panel no solve makes planar without folding (the rows there meet the boundary
     // slantwise). It goes; its neighbours close over the gap.

@@ -100,8 +100,12 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
   if (!(cell > 0) || !std::isfinite(cell)) throw Error(ErrorCode::CannotTile, "the surface has no area to tile");
   // Where the Voronoi regions of the lattice's points do not come out as disks on the field mesh (a region
   // across a thin part, a handle narrower than a few cells), the field mesh is laid finer once and all again.
+  // Where that fails too (regions folded over a crease whose field-mesh normals turn sharply), the lattice laid at
+  // a cell a few percent smaller shifts its points off the configuration.
+  constexpr double kRetries[3][2] = {{1.0, 1.0}, {kDenser, 1.0}, {kDenser, 0.97}};
   for (int density = 0;; ++density) {
-    const double samples = kSamplesPerCell * (density == 0 ? 1.0 : kDenser);
+    const double samples = kSamplesPerCell * kRetries[density][0];
+    cell *= kRetries[density][1];
     try {
       report(0.02, "field mesh");
       FieldMesh m = fieldMesh(surface, cell / samples, options.anisotropy, cancel);
@@ -112,7 +116,7 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       const std::vector<double> integrable = integrableScale(m, fields[0], 1.0);
       for (int v = 0; v < m.vertexCount(); ++v) scale[v] *= integrable[v];
       setScale(levels, scale);
-      double laid = options.cell > 0 ? options.cell : cellForCount(m, scale, options.faces);
+      double laid = options.cell > 0 ? cell : kRetries[density][1] * cellForCount(m, scale, options.faces);
 
       // The lattice at the cell, and again (at most twice) with the cell scaled where the count misses the faces
       // asked for by more than kCountMiss; the closest is kept.
@@ -166,7 +170,7 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       for (std::string& note : best.notes) t.notes.push_back(std::move(note));
       return t;
     } catch (const Error& e) {
-      if (e.code() != ErrorCode::CannotTile || density > 0 || std::string(e.what()).find("non-manifold") == std::string::npos) throw;
+      if (e.code() != ErrorCode::CannotTile || density == 2 || std::string(e.what()).find("non-manifold") == std::string::npos) throw;
     }
   }
 }
