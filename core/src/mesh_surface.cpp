@@ -57,21 +57,9 @@ LocalGeometry principalFrame(const Vec3& point, const Vec3& normal, const Eigen:
   const double mean = 0.5 * (a + c), radius = std::sqrt(half * half + b * b);
   g.k1 = mean + radius;
   g.k2 = mean - radius;
-  // The direction of the larger eigenvalue, at angle t = atan2(2 b, a - c) / 2 in (-pi/2, pi/2] from u:
-  // with X = a - c, Y = 2 b, R = |(X, Y)|, by the half-angle formulas cos t = (R + X) / s, sin t = Y / s
-  // with s = sqrt(2 R (R + X)) where X >= 0, and cos t = |Y| / s, sin t = +-(R - X) / s with
-  // s = sqrt(2 R (R - X)) where X < 0 (no cancellation either way). R = 0 (umbilic): u.
-  const double X = a - c, Y = 2 * b, R = 2 * radius;
-  double cosT = 1, sinT = 0;
-  if (X >= 0) {
-    if (R > 0) {
-      const double s = std::sqrt(2 * R * (R + X));
-      cosT = (R + X) / s, sinT = Y / s;
-    }
-  } else {
-    const double s = std::sqrt(2 * R * (R - X));
-    cosT = std::abs(Y) / s, sinT = std::copysign((R - X) / s, Y);
-  }
+  // The direction of the larger eigenvalue, at angle t = atan2(2 b, a - c) / 2 in (-pi/2, pi/2] from u.
+  const Vec2 t = largerEigenDirection(a - c, 2 * b, 2 * radius);
+  const double cosT = t.x(), sinT = t.y();
   g.d1 = cosT * u + sinT * v;
   g.d2 = normal.cross(g.d1);
   return g;

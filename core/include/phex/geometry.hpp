@@ -37,4 +37,19 @@ struct LocalGeometry {
   double largestCurvature() const { return std::max(std::abs(k1), std::abs(k2)); }
 };
 
+// The direction of the larger eigenvalue of a symmetric 2x2 form [[a, b], [b, c]], as (cos t, sin t) of the angle
+// t = atan2(Y, X) / 2 with X = a - c, Y = 2 b and R = |(X, Y)| (computed by the caller), from +, -, *, / and
+// sqrt alone (libm's atan2, cos and sin differ between platforms in the last bit). By the half-angle formulas
+// cos t = (R + X) / s, sin t = Y / s with s = sqrt(2 R (R + X)) where X >= 0, and cos t = |Y| / s,
+// sin t = +-(R - X) / s with s = sqrt(2 R (R - X)) where X < 0 (no cancellation either way). R = 0: (1, 0).
+inline Eigen::Vector2d largerEigenDirection(double X, double Y, double R) {
+  if (X >= 0) {
+    if (!(R > 0)) return Eigen::Vector2d(1, 0);
+    const double s = std::sqrt(2 * R * (R + X));
+    return Eigen::Vector2d((R + X) / s, Y / s);
+  }
+  const double s = std::sqrt(2 * R * (R - X));
+  return Eigen::Vector2d(std::abs(Y) / s, std::copysign((R - X) / s, Y));
+}
+
 }  // namespace phex

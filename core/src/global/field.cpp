@@ -11,8 +11,6 @@
 namespace phex::global {
 namespace {
 
-// Vertices per thread in the sweeps (each costs about a microsecond per neighbour).
-constexpr int kSweepGrain = 1024;
 // The hierarchy stops where a level has this many vertices or fewer, or barely shrinks.
 constexpr int kCoarsest = 64;
 // Gauss-Seidel sweeps per level: more on the coarse levels (cheap, and where the field's layout settles), fewer on
@@ -30,19 +28,9 @@ constexpr double kAlign = 0.02;
 Vec3 smallerAxis(double a, double b, double c, const Vec3& u, const Vec3& w, double& lo, double& hi) {
   const double half = 0.5 * (a - c), mean = 0.5 * (a + c), radius = std::sqrt(half * half + b * b);
   lo = mean - radius, hi = mean + radius;
-  // Larger eigenvalue's direction at angle atan2(2b, a - c) / 2 from u; the smaller one is it turned by 90 degrees.
-  const double X = a - c, Y = 2 * b, R = 2 * radius;
-  double cosT = 1, sinT = 0;
-  if (X >= 0) {
-    if (R > 0) {
-      const double s = std::sqrt(2 * R * (R + X));
-      cosT = (R + X) / s, sinT = Y / s;
-    }
-  } else {
-    const double s = std::sqrt(2 * R * (R - X));
-    cosT = std::abs(Y) / s, sinT = std::copysign((R - X) / s, Y);
-  }
-  return -sinT * u + cosT * w;
+  // The larger eigenvalue's direction turned by 90 degrees.
+  const Vec2 t = largerEigenDirection(a - c, 2 * b, 2 * radius);
+  return -t.y() * u + t.x() * w;
 }
 
 Vec3 anyTangent(const Vec3& n) { return normalized(tangential(std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY(), n)); }
@@ -379,29 +367,20 @@ std::vector<std::vector<Vec3>> orientationField(std::vector<Level>& levels, doub
         Q[v] = c.squaredNorm() > 0.25 ? c : target[v];
       }
     }
-    const int sweeps = sweepsAt(l);
-    for (int s = 0; s < sweeps; ++s) {
-      for (int c = 0; c + 1 < static_cast<int>(L.colorStart.size()); ++c) {
-        const int begin = L.colorStart[c], end = L.colorStart[c + 1];
-        parallelRanges(end - begin, kSweepGrain, [&](int b, int e) {
-          for (int k = begin + b; k < begin + e; ++k) {
-            const int v = L.colorOrder[k];
-            if (L.fixed[v]) {
-              Q[v] = target[v];
-              continue;
-            }
-            Vec2 sum = Q[v];
-            double weight = 0;
-            for (int i = L.start[v]; i < L.start[v + 1]; ++i) {
-              sum = unit(sum * weight + nearestOfSix2(sum, mul(R[i], Q[L.adjacent[i]])));
-              weight += 1;
-            }
-            if (align[v] > 0) sum = unit(sum * weight + align[v] * nearestOfSix2(sum, target[v]));
-            if (sum.squaredNorm() > 0.25) Q[v] = sum;
-          }
-        });
+    sweepLevel(L, sweepsAt(l), [&](int v) {
+      if (L.fixed[v]) {
+        Q[v] = target[v];
+        return;
       }
-    }
+      Vec2 sum = Q[v];
+      double weight = 0;
+      for (int i = L.start[v]; i < L.start[v + 1]; ++i) {
+        sum = unit(sum * weight + nearestOfSix2(sum, mul(R[i], Q[L.adjacent[i]])));
+        weight += 1;
+      }
+      if (align[v] > 0) sum = unit(sum * weight + align[v] * nearestOfSix2(sum, target[v]));
+      if (sum.squaredNorm() > 0.25) Q[v] = sum;
+    });
     out[l].resize(L.size());
     for (int v = 0; v < L.size(); ++v) out[l][v] = L.frame[v].vector(Q[v]);
     if (progress) progress({"triangulate", 0.1 + 0.2 * double(direct + 1 - l) / (direct + 1), "direction field, level " + std::to_string(l)});

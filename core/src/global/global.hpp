@@ -6,6 +6,7 @@
 #include "phex/geometry.hpp"
 #include "phex/global_triangulation.hpp"
 #include "phex/mesh.hpp"
+#include "phex/parallel.hpp"
 #include "phex/progress.hpp"
 #include "phex/surface.hpp"
 
@@ -107,6 +108,22 @@ struct Level {
   int size() const { return static_cast<int>(x.size()); }
 };
 std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& scale);
+
+// Vertices per thread in the sweeps (each costs about a microsecond).
+constexpr int kSweepGrain = 1024;
+
+// `sweeps` Gauss-Seidel sweeps over level L: update(v) for every vertex, one colour after another, the vertices
+// of a colour over threads (no two are neighbours, so the result does not depend on the thread count).
+template <typename Update>
+void sweepLevel(const Level& L, int sweeps, const Update& update) {
+  for (int s = 0; s < sweeps; ++s)
+    for (int c = 0; c + 1 < static_cast<int>(L.colorStart.size()); ++c) {
+      const int begin = L.colorStart[c], end = L.colorStart[c + 1];
+      parallelRanges(end - begin, kSweepGrain, [&](int b, int e) {
+        for (int k = begin + b; k < begin + e; ++k) update(L.colorOrder[k]);
+      });
+    }
+}
 // Sets the cell's factor on level 0 and, area-weighted, on the coarser levels.
 void setScale(std::vector<Level>& levels, const std::vector<double>& scale);
 

@@ -10,7 +10,6 @@
 namespace phex::global {
 namespace {
 
-constexpr int kSweepGrain = 1024;
 constexpr double kFlatHinge = 0.999;
 // Sweeps per level: many on the coarsest (cheap, where the lattice's layout settles), few on the middle ones, more on
 // the finest, whose points are extracted (16 there and 12 between cost twice the time for 0.2 points of valence 6).
@@ -111,30 +110,21 @@ std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vec
       O[v] = intoPlane(nearestPoint(lattice[v], start, L.x[v]), L.x[v], L.frame[v].n);
       if (L.fixed[v]) O[v] = ontoBoundary(O[v], L.x[v], L.target[v], lattice[v].U);
     }
-    const int sweeps = sweepsAt(l, count);
-    for (int s = 0; s < sweeps; ++s) {
-      for (int c = 0; c + 1 < static_cast<int>(L.colorStart.size()); ++c) {
-        const int begin = L.colorStart[c], end = L.colorStart[c + 1];
-        parallelRanges(end - begin, kSweepGrain, [&](int b, int e) {
-          for (int k = begin + b; k < begin + e; ++k) {
-            const int v = L.colorOrder[k];
-            const Vec3& x = L.x[v];
-            const Vec3& n = L.frame[v].n;
-            Vec3 sum = O[v];
-            double weight = 0;
-            for (int i = L.start[v]; i < L.start[v + 1]; ++i) {
-              const int u = L.adjacent[i];
-              const Vec3 p = nearestHinged(lattice[u], O[u], L.x[u], L.frame[u].n, sum, x, n);
-              sum = (sum * weight + p) / (weight + 1);
-              weight += 1;
-            }
-            Vec3 o = intoPlane(nearestPoint(lattice[v], sum, x), x, n);
-            if (L.fixed[v]) o = ontoBoundary(o, x, L.target[v], lattice[v].U);
-            O[v] = o;
-          }
-        });
+    sweepLevel(L, sweepsAt(l, count), [&](int v) {
+      const Vec3& x = L.x[v];
+      const Vec3& n = L.frame[v].n;
+      Vec3 sum = O[v];
+      double weight = 0;
+      for (int i = L.start[v]; i < L.start[v + 1]; ++i) {
+        const int u = L.adjacent[i];
+        const Vec3 p = nearestHinged(lattice[u], O[u], L.x[u], L.frame[u].n, sum, x, n);
+        sum = (sum * weight + p) / (weight + 1);
+        weight += 1;
       }
-    }
+      Vec3 o = intoPlane(nearestPoint(lattice[v], sum, x), x, n);
+      if (L.fixed[v]) o = ontoBoundary(o, x, L.target[v], lattice[v].U);
+      O[v] = o;
+    });
     parentO.swap(O);
     if (progress) progress({"triangulate", 0.3 + 0.2 * double(count - l) / count, "lattice, level " + std::to_string(l)});
   }
