@@ -54,9 +54,9 @@ struct Site {
 
 class Extractor {
  public:
-  Extractor(const Surface& surface, const FieldMesh& m, const std::vector<Vec3>& q, const std::vector<Vec3>& o,
-            const std::vector<double>& scale, double cell)
-      : surface_(surface), m_(m), q_(q), o_(o), scale_(scale), cell_(cell) {}
+  Extractor(const Surface& surface, const FieldMesh& m, const std::vector<Vec3>& o, const std::vector<double>& scale,
+            double cell)
+      : surface_(surface), m_(m), o_(o), scale_(scale), cell_(cell) {}
 
   Extraction run(const CancelFlag* cancel) {
     clusterSites();
@@ -455,7 +455,6 @@ class Extractor {
 
   const Surface& surface_;
   const FieldMesh& m_;
-  const std::vector<Vec3>& q_;
   const std::vector<Vec3>& o_;
   const std::vector<double>& scale_;
   double cell_;
@@ -469,10 +468,9 @@ class Extractor {
 
 }  // namespace
 
-Extraction extractTriangulation(const Surface& surface, const FieldMesh& mesh, const std::vector<Vec3>& q,
-                                const std::vector<Vec3>& o, const std::vector<double>& scale, double cell,
-                                const CancelFlag* cancel) {
-  return Extractor(surface, mesh, q, o, scale, cell).run(cancel);
+Extraction extractTriangulation(const Surface& surface, const FieldMesh& mesh, const std::vector<Vec3>& o,
+                                const std::vector<double>& scale, double cell, const CancelFlag* cancel) {
+  return Extractor(surface, mesh, o, scale, cell).run(cancel);
 }
 
 }  // namespace phex::global

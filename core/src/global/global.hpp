@@ -156,9 +156,8 @@ struct Extraction {
   std::vector<std::string> notes;
   int repairs = 0;  // sites added or removed until the regions' dual was a manifold of the surface's topology
 };
-Extraction extractTriangulation(const Surface& surface, const FieldMesh& mesh, const std::vector<Vec3>& q,
-                                const std::vector<Vec3>& o, const std::vector<double>& scale, double cell,
-                                const CancelFlag* cancel);
+Extraction extractTriangulation(const Surface& surface, const FieldMesh& mesh, const std::vector<Vec3>& o,
+                                const std::vector<double>& scale, double cell, const CancelFlag* cancel);
 
 // Fits the interior vertices of `T` (boundary vertices stay) to the field: every edge as near as it can be to the
 // lattice vector it stands for (the field's direction nearest to it, of the cell's length at its ends), in least
@@ -174,9 +173,5 @@ void fitToField(TriMesh& T, const std::vector<int>& seeds, const Surface& surfac
 // 8 ringed by 5s). Dislocations (a 5 next to a 7) only move. Returns how many were flipped.
 int improveValences(TriMesh& T, const Surface& surface, const CancelFlag* cancel);
 
-// Euler characteristic of a triangle mesh (V - E + F) and its number of boundary loops.
-struct Topology {
-  int chi = 0, loops = 0;
-};
 
 }  // namespace phex::global

@@ -126,7 +126,7 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
         report(0.3 + 0.1 * attempt, "lattice");
         const std::vector<Vec3> o = positionField(levels, fields, laid, progress, cancel);
         report(0.5 + 0.1 * attempt, "extraction");
-        Extraction ex = extractTriangulation(surface, m, fields[0], o, scale, laid, cancel);
+        Extraction ex = extractTriangulation(surface, m, o, scale, laid, cancel);
         const double count = std::max(1.0, static_cast<double>(ex.mesh.V.rows()));
         const double miss = options.faces > 0 ? std::max(count / options.faces, options.faces / count) : 1.0;
         if (miss < bestMiss) bestMiss = miss, best = std::move(ex), bestCell = laid;
