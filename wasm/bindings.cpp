@@ -255,6 +255,7 @@ val resultToJs(const phex::PipelineResult& r) {
   out.set("field", r.field);
   out.set("surfaceReused", r.surfaceReused);
   out.set("farNodes", r.farNodes);
+  out.set("coverageGap", r.coverageGap);
   val origin = val::array();
   for (int k = 0; k < 3; ++k) origin.call<void>("push", r.origin(k));
   out.set("origin", origin);

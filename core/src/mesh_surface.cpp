@@ -1078,4 +1078,9 @@ std::string curvatureCsv(const std::vector<LocalGeometry>& rows) {
   return out;
 }
 
+Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 w = closestBarycentric(p, a, b, c);
+  return w(0) * a + w(1) * b + w(2) * c;
+}
+
 }  // namespace phex

@@ -1,4 +1,5 @@
 #include "phex/metrics.hpp"
+#include "phex/mesh_surface.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -323,6 +324,83 @@ double largestSurfaceDistance(const PolyMesh& mesh, const Surface& surface) {
     for (int v = begin; v < end; ++v) off[v] = (surface.closestPoint(mesh.vertex(v)).point - mesh.vertex(v)).norm();
   });
   return off.empty() ? 0.0 : *std::max_element(off.begin(), off.end());
+}
+
+}  // namespace phex
+
+namespace phex {
+
+double largestGapToMesh(const PolyMesh& mesh, const std::vector<Vec3>& points) {
+  // The faces fanned from their centroids into triangles, bucketed in a uniform grid of cells a mean edge wide; each point searched in growing shells of cells until no nearer triangle can be left.
+  struct Tri {
+    Vec3 a, b, c;
+  };
+  std::vector<Tri> tris;
+  Box3 box;
+  for (int f = 0; f < mesh.faceCount(); ++f) {
+    const int n = mesh.faceSize(f);
+    Vec3 centre = Vec3::Zero();
+    for (int k = 0; k < n; ++k) centre += mesh.vertex(mesh.face(f)[k]);
+    centre /= n;
+    for (int k = 0; k < n; ++k) {
+      tris.push_back({centre, mesh.vertex(mesh.face(f)[k]), mesh.vertex(mesh.face(f)[(k + 1) % n])});
+      box.extend(tris.back().b);
+    }
+  }
+  if (tris.empty() || points.empty()) return 0;
+  const double h = std::max(mesh.meanEdgeLength(), 1e-12 * box.diagonal().norm());
+  for (const Vec3& p : points) box.extend(p);
+  const Eigen::Vector3i dims = ((box.max() - box.min()) / h).array().floor().cast<int>().cwiseMax(0) + 1;
+  if (double(dims.x()) * dims.y() * dims.z() > 4e7) return std::numeric_limits<double>::quiet_NaN();
+  auto cellOf = [&](const Vec3& p) {
+    return ((p - box.min()) / h).array().floor().cast<int>().max(0).min(dims.array() - 1).matrix().eval();
+  };
+  auto index = [&](const Eigen::Vector3i& c) { return (std::size_t(c.z()) * dims.y() + c.y()) * dims.x() + c.x(); };
+  // Cells in compressed rows: the triangles of cell c are in[start[c] .. start[c + 1]).
+  const std::size_t nc = std::size_t(dims.x()) * dims.y() * dims.z();
+  std::vector<std::pair<Eigen::Vector3i, Eigen::Vector3i>> spans(tris.size());
+  std::vector<int> start(nc + 1, 0);
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    Box3 b;
+    b.extend(tris[t].a), b.extend(tris[t].b), b.extend(tris[t].c);
+    spans[t] = {cellOf(b.min()), cellOf(b.max())};
+    for (int z = spans[t].first.z(); z <= spans[t].second.z(); ++z)
+      for (int y = spans[t].first.y(); y <= spans[t].second.y(); ++y)
+        for (int x = spans[t].first.x(); x <= spans[t].second.x(); ++x) ++start[index(Eigen::Vector3i(x, y, z)) + 1];
+  }
+  for (std::size_t c = 0; c < nc; ++c) start[c + 1] += start[c];
+  std::vector<int> in(start.back()), fill(start.begin(), start.end() - 1);
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int z = spans[t].first.z(); z <= spans[t].second.z(); ++z)
+      for (int y = spans[t].first.y(); y <= spans[t].second.y(); ++y)
+        for (int x = spans[t].first.x(); x <= spans[t].second.x(); ++x) in[fill[index(Eigen::Vector3i(x, y, z))]++] = int(t);
+  std::vector<double> gap(points.size(), 0.0);
+  parallelRanges(static_cast<int>(points.size()), kPointsPerThread, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i) {
+      const Vec3& p = points[i];
+      const Eigen::Vector3i c = cellOf(p);
+      double best = std::numeric_limits<double>::infinity();
+      const int most = dims.maxCoeff();
+      for (int r = 0; r <= most; ++r) {
+        // Every triangle within r - 1 cells of p's cell has been seen: stop once the best is nearer than that.
+        if (std::sqrt(best) <= (r - 1) * h) break;
+        for (int z = c.z() - r; z <= c.z() + r; ++z)
+          for (int y = c.y() - r; y <= c.y() + r; ++y)
+            for (int x = c.x() - r; x <= c.x() + r; ++x) {
+              if (std::max({std::abs(x - c.x()), std::abs(y - c.y()), std::abs(z - c.z())}) != r) continue;
+              if (x < 0 || y < 0 || z < 0 || x >= dims.x() || y >= dims.y() || z >= dims.z()) continue;
+              const std::size_t cell = index(Eigen::Vector3i(x, y, z));
+              for (int k = start[cell]; k < start[cell + 1]; ++k) {
+                const Tri& T = tris[in[k]];
+                const Vec3 b = closestPointOnTriangle(p, T.a, T.b, T.c);
+                best = std::min(best, (b - p).squaredNorm());
+              }
+            }
+      }
+      gap[i] = std::sqrt(best);
+    }
+  });
+  return *std::max_element(gap.begin(), gap.end());
 }
 
 }  // namespace phex

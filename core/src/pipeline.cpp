@@ -1506,6 +1506,17 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
 
   report("measure", 0, "measuring");
   r.metrics = measure(r.hex, surface);
+  {
+    std::vector<Vec3> points;
+    if (const auto* mesh = dynamic_cast<const MeshSurface*>(&surface)) {
+      const int n = mesh->vertexCount(), stride = std::max(1, n / 10000);
+      for (int v = 0; v < n; v += stride) points.push_back(mesh->mesh().V.row(v).transpose());
+    } else {
+      for (const LocalGeometry& g : surface.samples(2000)) points.push_back(g.point);
+    }
+    const double edge = r.hex.meanEdgeLength();
+    r.coverageGap = edge > 0 ? largestGapToMesh(r.hex, points) / edge : 0.0;
+  }
   int interior = 0, hexagons = 0;
   for (int f = 0; f < r.hex.faceCount(); ++f)
     if (!r.dual.boundaryFace[f]) ++interior, hexagons += r.hex.faceSize(f) == 6;

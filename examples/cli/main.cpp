@@ -232,6 +232,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"methodUsed", phex::triangulationMethodName(r.method)},
           {"fieldUsed", r.field},
           {"farNodes", r.farNodes},
+          {"coverageGap", r.coverageGap},
           {"mesh", {{"vertices", r.metrics.vertexCount}, {"faces", r.metrics.faceCount}, {"facesBySize", bySize}}},
           {"planarity", {{"max", r.metrics.planarityMax}, {"mean", r.metrics.planarityMean},
                          {"initialMax", r.solve.initialPlanarityMax}}},

@@ -146,6 +146,7 @@ TEST_CASE("global triangulation: planar to 1e-9 with every node of three faces a
     for (std::size_t v = 0; v < faces.size(); ++v)
       if (!onPanel[v]) CHECK(faces[v] == 3);
     CHECK(r.metrics.surfaceDistanceMax <= 0.002);
+    CHECK(r.coverageGap <= 1);  // no hole: every sample of the surface within a mean edge of the panels
   }
   SECTION("a closed genus-0 upload: 12 pentagons' worth of singular points, closed P-Hex mesh") {
     const TriMesh egg = test::closedSurfaceOfGenus(0, 32);
@@ -165,6 +166,7 @@ TEST_CASE("global triangulation: planar to 1e-9 with every node of three faces a
     for (int f = 0; f < r.hex.faceCount(); ++f) sum += 6 - r.hex.faceSize(f);
     CHECK(sum == 12);
     for (int f = 0; f < r.hex.faceCount(); ++f) CHECK(r.dual.boundaryFace[f] == 0);
+    CHECK(r.coverageGap <= 1);
   }
 }
 

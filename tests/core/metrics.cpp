@@ -103,3 +103,16 @@ TEST_CASE("metrics: diagonal planarity, convexity, areas, edges and valences") {
   CHECK(d.convex[0] == 0);
   CHECK(d.selfIntersecting[0] == 0);
 }
+
+TEST_CASE("metrics: the largest gap from points to a mesh finds a hole") {
+  // A 2 x 2 grid of unit squares in z = 0 without its middle ring of faces... here: two unit squares side by side,
+  // and points on the plane: the one over the squares is on them, the one 1.5 beyond their edge is 1.5 away.
+  PolyMesh m;
+  m.V.resize(6, 3);
+  m.V << 0, 0, 0, 1, 0, 0, 2, 0, 0, 0, 1, 0, 1, 1, 0, 2, 1, 0;
+  m.addFace({0, 1, 4, 3});
+  m.addFace({1, 2, 5, 4});
+  CHECK(largestGapToMesh(m, {Vec3(0.5, 0.5, 0), Vec3(1.5, 0.2, 0)}) == Approx(0.0).margin(1e-12));
+  CHECK(largestGapToMesh(m, {Vec3(0.5, 0.5, 0), Vec3(3.5, 0.5, 0)}) == Approx(1.5));
+  CHECK(largestGapToMesh(m, {Vec3(1.0, 0.5, 2.0)}) == Approx(2.0));
+}

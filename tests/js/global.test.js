@@ -68,6 +68,8 @@ test('a closed genus-0 upload: singular indices add up to 12, as do the P-Hex fa
   assert.equal(sum, 12, `indices ${[...index]}`);
   assertClosedDual(r, 0);
   assert.equal(r.metrics.selfIntersectingCount, 0);
+  // No hole: every vertex of the upload within one mean panel edge of the P-Hex mesh.
+  assert.ok(r.coverageGap > 0 && r.coverageGap <= 1, `coverage gap ${r.coverageGap}`);
   assert.ok(r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
 
   // The same blob in site coordinates: its singular points come back beside its mesh, in the file's coordinates.

@@ -244,6 +244,9 @@ export interface Result {
   /** P-Hex nodes off the surface by over 1 % of the diagonal (five times the goal) and a mean edge: a shortfall
    * the notes name (the farthest, where), for which the command line exits 2. 0 for a good result. */
   farNodes: number;
+  /** The largest distance from the surface (the upload's vertices, or samples of an analytic surface) to the
+   * P-Hex mesh, in mean panel edges: over 1 means a hole or a strip left bare. */
+  coverageGap: number;
   /** An upload far from the origin (more than ten times its size: site coordinates) is computed about the
    * centre of its box, this point, where its coordinates keep their digits; every mesh and note here is in the
    * file's coordinates all the same. [0, 0, 0] otherwise. */

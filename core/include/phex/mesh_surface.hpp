@@ -173,6 +173,9 @@ class MeshSurface : public Surface {
   std::vector<Eigen::Vector4d> spheres_;  // per triangle: a ball holding it (centre, radius), for quick rejection
 };
 
+// The point of triangle abc nearest to p (exact, by the Voronoi regions of its corners, edges and face).
+Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
 // `phex curvature` output: one row per entry of `rows` (for a MeshSurface, its vertexGeometries(), in the
 // order of surface.mesh(): the file's vertex order less the vertices no kept triangle uses; STL: distinct
 // corners in order of first appearance; MeshReadReport::fileVertex maps each row back to the file), as

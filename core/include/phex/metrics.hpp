@@ -85,4 +85,9 @@ MeshMetrics measure(const PolyMesh& mesh, const Surface& surface);
 // surfaceDistanceMax times the diagonal, without the rest of the measures.
 double largestSurfaceDistance(const PolyMesh& mesh, const Surface& surface);
 
+// The largest distance from `points` (an upload's vertices, an analytic surface's samples) to the polygon mesh
+// (its faces fanned from their centroids): where a part of the surface has no panel over it. NaN for a mesh so
+// spread out that the search grid would be too large.
+double largestGapToMesh(const PolyMesh& mesh, const std::vector<Vec3>& points);
+
 }  // namespace phex

@@ -113,6 +113,10 @@ struct PipelineResult {
   Duality duality = Duality::Dupin;
   MeshMetrics metrics;         // of `hex`
   int farNodes = 0;            // nodes of `hex` off the surface by over kFarNodeDistance and a mean edge
+  // The largest distance of the surface's points (an upload's vertices, at most about 10000; some 2000 samples of an
+  // analytic surface)
+  // to `hex`, in its mean edges: over 1 where a part of the surface has no panel over it (a hole).
+  double coverageGap = 0.0;
   double interiorHexagonFraction = 0.0;  // hexagons among the faces not on the boundary (dual.boundaryFace)
   PlanarizeReport solve;
   int boundaryPanelsSplit = 0;  // boundary panels cut in two to become planar (PipelineParams::splitBoundaryPanels)
