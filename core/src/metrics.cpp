@@ -330,7 +330,8 @@ double largestSurfaceDistance(const PolyMesh& mesh, const Surface& surface) {
 
 namespace phex {
 
-double largestGapToMesh(const PolyMesh& mesh, const std::vector<Vec3>& points) {
+double largestGapToMesh(const PolyMesh& mesh, const std::vector<Vec3>& points, int* where) {
+  if (where) *where = -1;
   // The faces fanned from their centroids into triangles, bucketed in a uniform grid of cells a mean edge wide; each point searched in growing shells of cells until no nearer triangle can be left.
   struct Tri {
     Vec3 a, b, c;
@@ -400,7 +401,9 @@ double largestGapToMesh(const PolyMesh& mesh, const std::vector<Vec3>& points) {
       gap[i] = std::sqrt(best);
     }
   });
-  return *std::max_element(gap.begin(), gap.end());
+  const auto most = std::max_element(gap.begin(), gap.end());
+  if (where) *where = static_cast<int>(most - gap.begin());
+  return *most;
 }
 
 }  // namespace phex

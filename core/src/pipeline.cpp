@@ -1515,7 +1515,20 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
       for (const LocalGeometry& g : surface.samples(2000)) points.push_back(g.point);
     }
     const double edge = r.hex.meanEdgeLength();
-    r.coverageGap = edge > 0 ? largestGapToMesh(r.hex, points) / edge : 0.0;
+    int where = -1;
+    r.coverageGap = edge > 0 ? largestGapToMesh(r.hex, points, &where) / edge : 0.0;
+    // A part of the surface with no panel over it (a hole where rows did not meet, a strip along the boundary
+    // left bare, panels pulled off the surface by an unconverged solve): named, where it is largest.
+    if (r.coverageGap > kCoverageGapGoal && where >= 0) {
+      const Vec3& at = points[static_cast<std::size_t>(where)];
+      std::ostringstream s;
+      s.precision(3);
+      s << "the surface near (" << at.x() << ", " << at.y() << ", " << at.z() << ") lies " << r.coverageGap
+        << " mean panel edges from the nearest panel (the goal is " << kCoverageGapGoal
+        << "): a part of the surface is left without panels there";
+      if (!r.solve.converged) s << " (the planarity solve did not converge and moved the panels off the surface)";
+      r.triangulation.notes.push_back(s.str());
+    }
   }
   int interior = 0, hexagons = 0;
   for (int f = 0; f < r.hex.faceCount(); ++f)

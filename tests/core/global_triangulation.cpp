@@ -233,4 +233,31 @@ TEST_CASE("global triangulation: a part smaller than a cell is named in the note
   CHECK(named);
   CHECK(countEdges(t.mesh).boundary == 0);
   CHECK(test::eulerCharacteristic(t.mesh) == 0);
+
+  // Through the pipeline: the part left bare is a gap of several panel edges, named in the notes with its place.
+  PipelineParams p;
+  p.method = TriangulationMethod::Global;
+  p.faces = 400;
+  MeshInput m;
+  const std::string obj = toObj(both);
+  m.bytes.assign(obj.begin(), obj.end());
+  m.format = "obj";
+  m.name = "two-parts.obj";
+  p.mesh = m;
+  const PipelineResult r = runPipeline(p);
+  CHECK(r.coverageGap > 3);
+  std::string gapNote;
+  for (const std::string& n : r.triangulation.notes)
+    if (n.find("mean panel edges from the nearest panel") != std::string::npos) gapNote = n;
+  INFO(gapNote);
+  CHECK(gapNote.rfind("the surface near (5", 0) == 0);
+}
+
+TEST_CASE("pipeline: a surface fully covered by its panels has no gap note") {
+  PipelineParams p;
+  p.surface = "torus";
+  p.faces = 600;
+  const PipelineResult r = runPipeline(p);
+  CHECK(r.coverageGap < 0.5);
+  for (const std::string& n : r.triangulation.notes) CHECK(n.find("from the nearest panel") == std::string::npos);
 }

@@ -88,6 +88,7 @@ double largestSurfaceDistance(const PolyMesh& mesh, const Surface& surface);
 // The largest distance from `points` (an upload's vertices, an analytic surface's samples) to the polygon mesh
 // (its faces fanned from their centroids): where a part of the surface has no panel over it. NaN for a mesh so
 // spread out that the search grid would be too large.
-double largestGapToMesh(const PolyMesh& mesh, const std::vector<Vec3>& points);
+// `where`, if given, receives the index of the point farthest from the mesh (-1 for no point).
+double largestGapToMesh(const PolyMesh& mesh, const std::vector<Vec3>& points, int* where = nullptr);
 
 }  // namespace phex

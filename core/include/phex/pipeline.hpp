@@ -21,6 +21,9 @@ constexpr int kMaxFaces = 1000000;  // the largest face count phex accepts
 // command line exits 2 for. The mean edge spares coarse meshes, whose panels bulge that far by their size
 // (12 hexagons on a torus).
 constexpr double kFarNodeDistance = 0.01;
+// The goal for PipelineResult::coverageGap: every point of the surface within one mean panel edge of the P-Hex
+// mesh. Beyond it the notes name the place.
+constexpr double kCoverageGapGoal = 1.0;
 
 // How the triangulation is laid (§5, §7).
 enum class TriangulationMethod {
@@ -114,8 +117,8 @@ struct PipelineResult {
   MeshMetrics metrics;         // of `hex`
   int farNodes = 0;            // nodes of `hex` off the surface by over kFarNodeDistance and a mean edge
   // The largest distance of the surface's points (an upload's vertices, at most about 10000; some 2000 samples of an
-  // analytic surface)
-  // to `hex`, in its mean edges: over 1 where a part of the surface has no panel over it (a hole).
+  // analytic surface) to `hex`, in its mean edges: over kCoverageGapGoal where a part of the surface has no panel
+  // over it (a hole), which the notes then name with the place.
   double coverageGap = 0.0;
   double interiorHexagonFraction = 0.0;  // hexagons among the faces not on the boundary (dual.boundaryFace)
   PlanarizeReport solve;
