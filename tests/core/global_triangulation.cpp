@@ -52,6 +52,20 @@ MeshInput upload(const std::string& file) {
   return m;
 }
 
+// Pipeline parameters for `mesh` uploaded as an OBJ file named `name`, laid by the global method at `faces`.
+PipelineParams globalUpload(const TriMesh& mesh, const std::string& name, int faces) {
+  PipelineParams p;
+  p.method = TriangulationMethod::Global;
+  p.faces = faces;
+  MeshInput m;
+  const std::string obj = toObj(mesh);
+  m.bytes.assign(obj.begin(), obj.end());
+  m.format = "obj";
+  m.name = name;
+  p.mesh = m;
+  return p;
+}
+
 }  // namespace
 
 TEST_CASE("global triangulation: closed surfaces of genus 0 to 3 keep their genus, and the P-Hex dual has sum(6 - n) = 12(1 - g)") {
@@ -150,15 +164,7 @@ TEST_CASE("global triangulation: planar to 1e-9 with every node of three faces a
   }
   SECTION("a closed genus-0 upload: 12 pentagons' worth of singular points, closed P-Hex mesh") {
     const TriMesh egg = test::closedSurfaceOfGenus(0, 32);
-    PipelineParams p;
-    p.method = TriangulationMethod::Global;
-    p.faces = 800;
-    MeshInput m;
-    const std::string obj = toObj(egg);
-    m.bytes.assign(obj.begin(), obj.end());
-    m.format = "obj";
-    m.name = "egg.obj";
-    p.mesh = m;
+    const PipelineParams p = globalUpload(egg, "egg.obj", 800);
     const PipelineResult r = runPipeline(p);
     CHECK(r.solve.converged);
     CHECK(r.interiorFacesSplit == 0);
@@ -235,15 +241,7 @@ TEST_CASE("global triangulation: a part smaller than a cell is named in the note
   CHECK(test::eulerCharacteristic(t.mesh) == 0);
 
   // Through the pipeline: the part left bare is a gap of several panel edges, named in the notes with its place.
-  PipelineParams p;
-  p.method = TriangulationMethod::Global;
-  p.faces = 400;
-  MeshInput m;
-  const std::string obj = toObj(both);
-  m.bytes.assign(obj.begin(), obj.end());
-  m.format = "obj";
-  m.name = "two-parts.obj";
-  p.mesh = m;
+  const PipelineParams p = globalUpload(both, "two-parts.obj", 400);
   const PipelineResult r = runPipeline(p);
   CHECK(r.coverageGap > 3);
   std::string gapNote;
