@@ -259,3 +259,23 @@ TEST_CASE("pipeline: a surface fully covered by its panels has no gap note") {
   CHECK(r.coverageGap < 0.5);
   for (const std::string& n : r.triangulation.notes) CHECK(n.find("from the nearest panel") == std::string::npos);
 }
+
+TEST_CASE("global triangulation: a needle triangle is tiled from a field mesh as fine as its area needs") {
+  // 2.4 long and 0.06 wide: split by its median edge it took 14k field-mesh vertices and left most of it bare.
+  TriMesh needle;
+  needle.V.resize(3, 3);
+  needle.V << 1, 0, 0, 1.0625, 0, 0, -1, 0, 1.125;
+  needle.F.resize(1, 3);
+  needle.F << 0, 1, 2;
+  const MeshSurface surface(needle, "needle");
+  const Triangulation t = globalTriangulation(surface, atFaces(32));
+  REQUIRE(t.mesh.F.rows() > 0);
+  const std::string& note = t.notes.at(0);
+  const std::size_t at = note.find(" field-mesh vertices");
+  REQUIRE(at != std::string::npos);
+  const std::size_t from = note.rfind(' ', at - 1) + 1;
+  const int vertices = std::stoi(note.substr(from, at - from));
+  INFO(note);
+  CHECK(vertices < 10000);
+  CHECK(countEdges(t.mesh).boundary > 0);
+}

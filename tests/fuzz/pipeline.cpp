@@ -1,6 +1,6 @@
 // phex — fuzz target: the whole pipeline on a tiny uploaded mesh (fuzz.hpp: decodeMesh, written as the OBJ
-// file a user would upload), at most 60 faces, with the method, field, duality, solver and options a byte
-// picks. It tiles the mesh or refuses it; what it returns is finite.
+// file a user would upload), at most 60 faces, with the method (the global one with its field options too),
+// field, duality, solver and options a byte picks. It tiles the mesh or refuses it; what it returns is finite.
 #include <phex/pipeline.hpp>
 
 #include <string>
@@ -14,8 +14,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   phex::PipelineParams p;
   const std::uint8_t choice = in.byte(), more = in.byte();
   const phex::TriangulationMethod methods[] = {phex::TriangulationMethod::Auto, phex::TriangulationMethod::Progressive,
-                                               phex::TriangulationMethod::Prespecified, phex::TriangulationMethod::Subdivision};
-  p.method = methods[choice % 4];
+                                               phex::TriangulationMethod::Prespecified, phex::TriangulationMethod::Subdivision,
+                                               phex::TriangulationMethod::Global};
+  // The first byte's low bits pick the method (global where they are 4-7, with its options from the next byte).
+  p.method = methods[(choice & 7) < 4 ? choice & 3 : 4];
   const char* fields[] = {"principal", "angle:30", "section", "param"};
   p.field = fields[(choice >> 2) % 4];
   p.duality = (choice >> 4) % 3 == 0 ? phex::Duality::Auto : (choice >> 4) % 3 == 1 ? phex::Duality::Dupin : phex::Duality::Tangent;
@@ -24,6 +26,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   p.faces = 12 + more % 49;
   p.lowerBound = (more >> 6) * 0.3;
   p.maxIterations = 30;
+  if (p.method == phex::TriangulationMethod::Global) {
+    const std::uint8_t options = in.byte();
+    p.anisotropy = 1 + (options & 7);                // 1 .. 8
+    p.alignment = 10.0 * ((options >> 3) & 3) / 3;   // 0 .. 10
+    p.curvatureSizing = ((options >> 5) & 3) / 3.0;  // 0 .. 1
+  }
   const phex::TriMesh m = decodeMesh(in);
   std::string obj;
   char line[128];

@@ -20,6 +20,7 @@ constexpr std::size_t kMaxFieldTriangles = std::size_t(6) << 20;
 constexpr double kCoarseSplit = 3.0;
 // Edges longer than this many field-mesh edges after the uniform split are bisected.
 constexpr double kLongEdge = 1.3;
+constexpr double kAreaSplitMargin = 4.0;
 // The Dupin frame's aspect (sqrt of |k| ratio, regularized) from which the field is aligned, and fully.
 constexpr double kAlignFrom = 1.2, kAlignFull = 1.7;
 // The regularization of the aspect that decides the alignment, as a share of the metric's.
@@ -276,7 +277,12 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, cons
     for (int f = 0; f < base.F.rows(); ++f)
       for (int c = 0; c < 3; ++c) lengths.push_back((base.V.row(base.F(f, c)) - base.V.row(base.F(f, (c + 1) % 3))).norm());
     std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
-    const double most = std::floor(std::sqrt(double(kMaxFieldTriangles) / std::max<double>(1.0, double(base.F.rows()))));
+    // Nor finer than kAreaSplitMargin times the triangles of the surface's area at `edge` need: a mesh of needles,
+    // whose median edge is their length, was split into a hundred times as many (a two-triangle needle at 32
+    // faces: 14k field-mesh vertices and 1.6 s to refuse it); the long edges are bisected below all the same.
+    const double needed = kAreaSplitMargin * base.area() / (std::sqrt(3.0) / 4 * edge * edge);
+    const double most = std::floor(std::sqrt(std::min(double(kMaxFieldTriangles), std::max(1.0, needed)) /
+                                             std::max<double>(1.0, double(base.F.rows()))));
     const int k = static_cast<int>(std::clamp(std::ceil(lengths[lengths.size() / 2] / edge - 0.2), 1.0, std::max(1.0, most)));
     std::vector<int> source;
     const TriMesh split = global::split(base, k, m.where, source);
