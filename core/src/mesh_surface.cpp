@@ -378,6 +378,12 @@ MeshSurface::MeshSurface(TriMesh mesh, std::string name) : mesh_(std::move(mesh)
   if (mesh_.F.minCoeff() < 0 || mesh_.F.maxCoeff() >= nv)
     fail(name_, "a triangle refers to a vertex out of range (" + std::to_string(nv) + " vertices)");
   for (int v = 0; v < nv; ++v) bounds_.extend(Vec3(mesh_.V.row(v).transpose()));
+  if (const double extent = bounds_.diagonal().norm(); !(extent >= kMinMeshExtent)) {
+    char value[64];
+    std::snprintf(value, sizeof value, "%.3g", extent);
+    fail(name_, std::string("spans only ") + value +
+                    " (its box's diagonal), under 1e-50: the products of lengths that small underflow; scale the mesh up");
+  }
   buildTopology();
   const double edge = mesh_.meanEdgeLength();
   noise_ = edge > 0 ? estimateCurvature(2) / edge : 0.0;

@@ -7,6 +7,7 @@
 
 #include "phex/error.hpp"
 #include "phex/mesh_io.hpp"
+#include "phex/mesh_surface.hpp"
 
 using namespace phex;
 
@@ -416,6 +417,21 @@ TEST_CASE("mesh_io: coordinates beyond ±1e50 are refused, naming the vertex") {
   checkInvalid([&] { readText("OFF\n3 1 0\n0 0 0\n1 -2e50 0\n0 1 0\n3 0 1 2\n", "off"); }, {"vertex 1", "y = -2e+50"});
   // Up to the limit a mesh is read as it is.
   CHECK(readText("v 1e50 0 0\nv 1e50 1 0\nv 1e50 0 1\nv -1e50 0 0\nv -1e50 1 0\nv -1e50 0 1\nf 1 2 3\nf 4 5 6\n", "obj").V.rows() == 6);
+}
+
+TEST_CASE("mesh surface: a mesh spanning less than 1e-50 is refused, naming its extent") {
+  // Fuzzing's find: a triangle 1e-81 across had normals of length 0.95 (their squared norms underflowed).
+  TriMesh tiny;
+  tiny.V.resize(3, 3);
+  tiny.V << 0, 0, 0, 1e-81, 0, 0, 0, 1e-81, 0;
+  tiny.F.resize(1, 3);
+  tiny.F << 0, 1, 2;
+  checkInvalid([&] { MeshSurface(tiny, "tiny.obj"); }, {"'tiny.obj'", "spans only 1.41e-81 (its box's diagonal), under 1e-50"});
+  // At the limit the surface is built, its normals unit.
+  TriMesh small = tiny;
+  small.V *= 1e31;
+  const MeshSurface s(small, "small.obj");
+  CHECK(std::abs(s.vertexGeometry(0).normal.norm() - 1) < 1e-12);
 }
 
 TEST_CASE("mesh_io: a polygon of 40,000 corners is ear-clipped in near-linear time, without a fan") {

@@ -17,6 +17,9 @@ constexpr std::size_t kMaxMeshVertices = 20000000;
 // Coordinates are at most this far from 0 in any unit: phex multiplies lengths (areas, volumes, cross
 // products of cross products), which must stay finite, as must the extent of the mesh.
 constexpr double kMaxMeshCoordinate = 1e50;
+// Nor may a mesh span less than this (its box's diagonal): its lengths' products (areas, cross products of cross
+// products, the squared norms normals are made unit by) would underflow to zero or lose their digits.
+constexpr double kMinMeshExtent = 1e-50;
 // Polygons are ear-clipped in near-linear time (40,000 corners: a round cap in 20 ms, a star or a spiral in 50,
 // a comb of 10,000 teeth in 200); one so convoluted that its ears take more than kPolygonTestsPerCorner point
 // tests per corner (and a million), about a second per 100,000 corners, is rejected, naming it.
