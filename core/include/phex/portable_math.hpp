@@ -28,6 +28,15 @@ inline double reduce(double x, int& quadrant) {
   quadrant = static_cast<int>(static_cast<long long>(k) & 3);
   return ((x - k * kHalfPi1) - k * kHalfPi2) - k * kHalfPi3;
 }
+// sin of r + quadrant * pi/2.
+inline double inQuadrant(double r, int quadrant) {
+  switch (quadrant & 3) {
+    case 0: return sinKernel(r);
+    case 1: return cosKernel(r);
+    case 2: return -sinKernel(r);
+    default: return -cosKernel(r);
+  }
+}
 }  // namespace detail
 
 // For |x| up to about 1e6 (angles of surfaces: a few turns).
@@ -35,23 +44,14 @@ inline double sin(double x) {
   if (!std::isfinite(x)) return std::nan("");
   int q = 0;
   const double r = detail::reduce(x, q);
-  switch (q) {
-    case 0: return detail::sinKernel(r);
-    case 1: return detail::cosKernel(r);
-    case 2: return -detail::sinKernel(r);
-    default: return -detail::cosKernel(r);
-  }
+  return detail::inQuadrant(r, q);
 }
+// cos x = sin(x + pi/2): the same reduced argument, a quadrant on.
 inline double cos(double x) {
   if (!std::isfinite(x)) return std::nan("");
   int q = 0;
   const double r = detail::reduce(x, q);
-  switch (q) {
-    case 0: return detail::cosKernel(r);
-    case 1: return -detail::sinKernel(r);
-    case 2: return -detail::cosKernel(r);
-    default: return detail::sinKernel(r);
-  }
+  return detail::inQuadrant(r, q + 1);
 }
 
 // e^x: x = k ln 2 + r with |r| <= ln 2 / 2, e^r by its Taylor series, scaled by 2^k exactly.
