@@ -230,6 +230,7 @@ val resultToJs(const phex::PipelineResult& r) {
   solve.set("surfaceDistanceBefore", r.solve.surfaceDistanceBefore);
   solve.set("surfaceDistanceAfter", r.solve.surfaceDistanceAfter);
   solve.set("freeNodesSettled", r.solve.freeNodesSettled);
+  solve.set("boundaryNodesPlaced", r.solve.boundaryNodesPlaced);
   val log = val::array();
   for (const phex::IterationLog& it : r.solve.log) {
     val e = val::object();
@@ -256,6 +257,11 @@ val resultToJs(const phex::PipelineResult& r) {
   out.set("surfaceReused", r.surfaceReused);
   out.set("farNodes", r.farNodes);
   out.set("coverageGap", r.coverageGap);
+  val boundary = val::object();
+  boundary.set("max", r.boundaryOffset.max);
+  boundary.set("median", r.boundaryOffset.median);
+  boundary.set("nodes", r.boundaryOffset.nodes);
+  out.set("boundaryOffset", boundary);
   val origin = val::array();
   for (int k = 0; k < 3; ++k) origin.call<void>("push", r.origin(k));
   out.set("origin", origin);

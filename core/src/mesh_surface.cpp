@@ -719,6 +719,17 @@ double MeshSurface::estimateCurvature(int minRings) {
   return residual[nv / 2];
 }
 
+std::vector<std::vector<Vec3>> MeshSurface::boundaryCurves() const {
+  std::vector<std::vector<Vec3>> loops;
+  for (const std::vector<int>& ids : boundaryLoops_) {
+    std::vector<Vec3> loop;
+    loop.reserve(ids.size());
+    for (int v : ids) loop.push_back(mesh_.V.row(v).transpose());
+    loops.push_back(std::move(loop));
+  }
+  return loops;
+}
+
 LocalGeometry MeshSurface::geometryInTriangle(int f, const Vec3& barycentric) const {
   Vec3 point = Vec3::Zero(), normal = Vec3::Zero();
   Eigen::Matrix3d tensor = Eigen::Matrix3d::Zero();

@@ -1530,6 +1530,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
       r.triangulation.notes.push_back(s.str());
     }
   }
+  r.boundaryOffset = boundaryOffset(r.hex, surface);
   int interior = 0, hexagons = 0;
   for (int f = 0; f < r.hex.faceCount(); ++f)
     if (!r.dual.boundaryFace[f]) ++interior, hexagons += r.hex.faceSize(f) == 6;

@@ -199,4 +199,34 @@ bool ParametricSurface::isClosed() const {
   return d.periodicU && d.periodicV;
 }
 
+std::vector<std::vector<Vec3>> ParametricSurface::boundaryCurves() const {
+  const Domain d = domain();
+  const int n = kBoundarySamples;
+  auto along = [&](bool alongU, double fixed, std::vector<Vec3>& out, bool reverse) {
+    for (int i = 0; i < n; ++i) {
+      const double t = double(reverse ? n - i : i) / n;
+      out.push_back(alongU ? position(d.u0 + t * (d.u1 - d.u0), fixed) : position(fixed, d.v0 + t * (d.v1 - d.v0)));
+    }
+  };
+  std::vector<std::vector<Vec3>> loops;
+  if (d.periodicU && d.periodicV) return loops;
+  if (d.periodicU || d.periodicV) {  // two rims, the edges at both ends of the direction that does not wrap
+    for (const double end : {0.0, 1.0}) {
+      std::vector<Vec3> loop;
+      if (d.periodicU) along(true, d.v0 + end * (d.v1 - d.v0), loop, end > 0);
+      else along(false, d.u0 + end * (d.u1 - d.u0), loop, end == 0);
+      loops.push_back(std::move(loop));
+    }
+    return loops;
+  }
+  // One loop around the rectangle: v = v0, u = u1, v = v1 (backwards), u = u0 (backwards).
+  std::vector<Vec3> loop;
+  along(true, d.v0, loop, false);
+  along(false, d.u1, loop, false);
+  along(true, d.v1, loop, true);
+  along(false, d.u0, loop, true);
+  loops.push_back(std::move(loop));
+  return loops;
+}
+
 }  // namespace phex

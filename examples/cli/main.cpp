@@ -83,7 +83,8 @@ Options of `phex run`:
   --surface-fit on|off      once planar, shift every face plane along its normal (the faces stay
                             exactly planar) to bring the vertices closer to the surface, and put
                             nodes on fewer than three face planes nearest to it along the directions
-                            those planes leave free (default on)
+                            those planes leave free, the boundary nodes onto the boundary curve
+                            (report: boundaryOffset) (default on)
   --split-boundary on|off   a boundary panel left off planar (every face away from it planar), or one
                             that crosses itself, is cut in two along its best diagonal and the solve
                             goes on; so are up to 8 interior faces left off planar, or all of
@@ -233,6 +234,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"fieldUsed", r.field},
           {"farNodes", r.farNodes},
           {"coverageGap", r.coverageGap},
+          {"boundaryOffset", {{"max", r.boundaryOffset.max}, {"median", r.boundaryOffset.median},
+                              {"nodes", r.boundaryOffset.nodes}}},
           {"mesh", {{"vertices", r.metrics.vertexCount}, {"faces", r.metrics.faceCount}, {"facesBySize", bySize}}},
           {"planarity", {{"max", r.metrics.planarityMax}, {"mean", r.metrics.planarityMean},
                          {"initialMax", r.solve.initialPlanarityMax}}},
@@ -256,7 +259,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                       {"boundaryPanelsSplit", r.boundaryPanelsSplit}, {"interiorFacesSplit", r.interiorFacesSplit},
                       {"foldsAllowed", r.foldsAllowed}, {"method", phex::methodName(r.solverUsed)}, {"log", log}}},
           {"surfaceFit", {{"applied", r.solve.surfaceFitted}, {"distanceBefore", r.solve.surfaceDistanceBefore},
-                          {"distanceAfter", r.solve.surfaceDistanceAfter}, {"freeNodesSettled", r.solve.freeNodesSettled}}},
+                          {"distanceAfter", r.solve.surfaceDistanceAfter}, {"freeNodesSettled", r.solve.freeNodesSettled},
+                          {"boundaryNodesPlaced", r.solve.boundaryNodesPlaced}}},
           {"milliseconds", timings},
           {"threads", phex::threadCount()},
           {"peakMemoryMB", peakMemoryMB()}};

@@ -91,6 +91,18 @@ test('a closed genus-0 upload: no face cut, every node of three faces, Σ (6 −
   assert.equal(hexagonDefect(r.hex), 12);
 });
 
+test('boundary nodes end on the surface\'s boundary curve (a clean edge), and a closed surface has none', async () => {
+  const open = await phex.run({ surface: 'catenoid', method: 'global', faces: 600 });
+  assert.ok(open.solve.converged);
+  assert.ok(open.solve.boundaryNodesPlaced > 30, String(open.solve.boundaryNodesPlaced));
+  assert.ok(open.boundaryOffset.nodes > 30 && open.boundaryOffset.max <= 1e-3, JSON.stringify(open.boundaryOffset));
+  const raw = await phex.run({ surface: 'catenoid', method: 'global', faces: 600, surfaceFit: 'off' });
+  assert.equal(raw.solve.boundaryNodesPlaced, 0);
+  assert.ok(raw.boundaryOffset.median > 0.01, JSON.stringify(raw.boundaryOffset));
+  const r = await globalBlob();
+  assert.deepEqual(r.boundaryOffset, { max: 0, median: 0, nodes: 0 });
+});
+
 test('the other methods return no singular points', async () => {
   const r = await phex.run({ surface: 'sphere', faces: 200 });
   assert.notEqual(r.method, 'global');

@@ -200,6 +200,9 @@ export interface SolveReport {
    * to the surface along the directions those planes leave free: the faces stay exactly as planar.
    */
   freeNodesSettled: number;
+  /** Boundary nodes then put on the surface's boundary curve as seen along the surface's normal (a node on two
+   * planes along their line, to where it meets the curve's normal strip): the faces stay exactly as planar. */
+  boundaryNodesPlaced: number;
   log: IterationLog[];
 }
 
@@ -247,6 +250,10 @@ export interface Result {
   /** The largest distance from the surface (the upload's vertices, or samples of an analytic surface) to the
    * P-Hex mesh, in mean panel edges: over 1 means a hole or a strip left bare. */
   coverageGap: number;
+  /** How far the P-Hex mesh's boundary nodes lie from the surface's boundary curve across the surface (their
+   * height over it left out), in mean panel edges: 0 where the boundary panels end at the curve. Over `nodes`
+   * boundary nodes (0 on a closed surface). */
+  boundaryOffset: { max: number; median: number; nodes: number };
   /** An upload far from the origin (more than ten times its size: site coordinates) is computed about the
    * centre of its box, this point, where its coordinates keep their digits; every mesh and note here is in the
    * file's coordinates all the same. [0, 0, 0] otherwise. */
@@ -320,7 +327,8 @@ export interface RunParams {
    * intersection of its planes, so faces stay exactly planar) to bring the nodes closer to the surface;
    * kept only where the largest distance drops without folding a face (`solve.surfaceFitted`); then nodes on
    * fewer than three face planes are put nearest to the surface along the directions those planes leave free
-   * (`solve.freeNodesSettled`). 'off': neither.
+   * (`solve.freeNodesSettled`), and the boundary nodes onto the surface's boundary curve
+   * (`solve.boundaryNodesPlaced`, `boundaryOffset`). 'off': none of these.
    */
   surfaceFit?: 'on' | 'off';
   /**

@@ -20,6 +20,14 @@ inline int gridCell(double x, int n) {
   return q >= 0 ? (q < n ? static_cast<int>(q) : n - 1) : 0;
 }
 
+// The point of segment ab nearest to p (a when the segment has no length).
+inline Vec3 closestPointOnSegment(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 e = b - a;
+  const double ee = e.squaredNorm();
+  if (!(ee > 0)) return a;
+  return a + std::clamp((p - a).dot(e) / ee, 0.0, 1.0) * e;
+}
+
 // Second-order local geometry of a surface at one point (§3).
 // Sign convention: a principal curvature is positive where the surface bends away from `normal`,
 // so a sphere of radius R with outward normals has k1 = k2 = 1/R.

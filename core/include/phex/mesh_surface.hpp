@@ -51,6 +51,8 @@ class MeshSurface : public Surface {
   std::vector<LocalGeometry> samples(int count) const override;
   Box3 bounds() const override { return bounds_; }
   bool isClosed() const override { return boundaryLoops_.empty(); }
+  // The boundary loops' vertices (the upload's own boundary edges).
+  std::vector<std::vector<Vec3>> boundaryCurves() const override;
 
   const TriMesh& mesh() const { return mesh_; }
   int vertexCount() const { return static_cast<int>(mesh_.V.rows()); }

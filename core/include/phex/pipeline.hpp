@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "phex/boundary_curve.hpp"
 #include "phex/duality.hpp"
 #include "phex/global_triangulation.hpp"
 #include "phex/metrics.hpp"
@@ -120,6 +121,9 @@ struct PipelineResult {
   // analytic surface) to `hex`, in its mean edges: over kCoverageGapGoal where a part of the surface has no panel
   // over it (a hole), which the notes then name with the place.
   double coverageGap = 0.0;
+  // How far the boundary nodes of `hex` lie from the surface's boundary curve across the surface (leaving out
+  // their height over it), in mean edges: a clean edge has them on it, so the boundary panels end at the curve.
+  BoundaryOffset boundaryOffset;
   double interiorHexagonFraction = 0.0;  // hexagons among the faces not on the boundary (dual.boundaryFace)
   PlanarizeReport solve;
   int boundaryPanelsSplit = 0;  // boundary panels cut in two to become planar (PipelineParams::splitBoundaryPanels)

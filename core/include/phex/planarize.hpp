@@ -74,6 +74,9 @@ struct PlanarizeReport {
   // Nodes on fewer than three face planes then put nearest to the surface along the directions those planes
   // leave free (part of fitSurface; the faces stay exactly as planar).
   int freeNodesSettled = 0;
+  // Boundary nodes then put on the surface's boundary curve, or nearest to it, along the directions their
+  // planes leave free (part of fitSurface, after the free nodes; the faces stay exactly as planar).
+  int boundaryNodesPlaced = 0;
   std::vector<IterationLog> log;
 };
 

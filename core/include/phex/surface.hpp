@@ -24,6 +24,9 @@ class Surface {
   // About `count` points spread over the surface, with their local geometry (for choices made from an
   // overview of the shape: where to start laying, which family runs along the parabolic curves).
   virtual std::vector<LocalGeometry> samples(int count) const = 0;
+  // The boundary as closed polylines (a loop's first point is not repeated at its end), fine enough to stand for
+  // the curve at any panel size; none on a closed surface. Boundary nodes of the P-Hex mesh are put on it.
+  virtual std::vector<std::vector<Vec3>> boundaryCurves() const = 0;
 };
 
 // A surface given by P(u, v) on [u0, u1] x [v0, v1] with exact first and second derivatives.
@@ -54,6 +57,9 @@ class ParametricSurface : public Surface {
   LocalGeometry closestPoint(const Vec3& p) const override;
   Box3 bounds() const override;
   bool isClosed() const override;
+  // The domain's edges in directions that do not wrap, each sampled at kBoundarySamples points.
+  std::vector<std::vector<Vec3>> boundaryCurves() const override;
+  static constexpr int kBoundarySamples = 2048;
 
   // Wraps periodic coordinates into the domain and clamps the others.
   Vec2 normalize(Vec2 uv) const;
