@@ -1,5 +1,5 @@
 // phex — the surfaces' boundary curves, and the P-Hex mesh's boundary nodes put on them.
-#include <catch2/catch.hpp>
+#include <catch.hpp>
 
 #include <cmath>
 
