@@ -1009,6 +1009,7 @@ int settleFreeNodes(PolyMesh& mesh, const Surface& surface, const CancelFlag* ca
 // in an upload ended 0.11 % of the diagonal off instead of under 0.1 %), and turns no triangle over and folds no
 // face. Returns how many nodes moved.
 int placeBoundaryNodes(PolyMesh& mesh, const Surface& surface, const CancelFlag* cancel) {
+  constexpr double kOnCurve = 1e-3;  // in mean edges
   checkCancel(cancel);
   const std::vector<std::vector<Vec3>> curves = surface.boundaryCurves();
   const int nv = static_cast<int>(mesh.V.rows()), nf = mesh.faceCount();
@@ -1038,16 +1039,21 @@ int placeBoundaryNodes(PolyMesh& mesh, const Surface& surface, const CancelFlag*
     const Vec3 start = mesh.vertex(v);
     curve.near(start, near);
     const BoundaryCurve::Offset before = offsetOf(start);
-    if (!(before.across > 1e-12 * edge) || !std::isfinite(before.across)) continue;
+    // On the curve already (within a thousandth of an edge): left where it is.
+    if (!(before.across > kOnCurve * edge) || !std::isfinite(before.across)) continue;
     std::vector<Vec3> N;
     for (int k = at.start[v]; k < at.start[v + 1]; ++k)
       if (mesh.faceSize(at.faces[k]) > 3) N.push_back(planeNormal(at.faces[k]));
+    // The candidate nearest the curve, and of those about as near (the curve may cross a node's plane twice
+    // within an edge), the nearest to the node: which of them comes first must not decide.
     Vec3 target = start;
-    double best = before.across;
+    double best = before.across, bestMove = 0;
     auto consider = [&](const Vec3& y) {
-      if (!y.allFinite() || (y - start).norm() > edge || (surface.closestPoint(y).point - y).norm() > farthest) return;
+      const double move = (y - start).norm();
+      if (!y.allFinite() || move > edge || (surface.closestPoint(y).point - y).norm() > farthest) return;
       const double d = offsetOf(y).across;
-      if (d < best) best = d, target = y;
+      if (d < best - kOnCurve * edge || (d <= best + kOnCurve * edge && target != start && move < bestMove))
+        best = d, target = y, bestMove = move;
     };
     if (planes == 2) {  // along the planes' line onto the wall, in a few steps (the wall turns with the curve)
       const Vec3 line = N[0].cross(N[1]);
@@ -1074,7 +1080,7 @@ int placeBoundaryNodes(PolyMesh& mesh, const Surface& surface, const CancelFlag*
         }
       }
     }
-    if (!(best < before.across)) continue;
+    if (target == start) continue;
     std::vector<std::pair<int, Vec3>> triangles;
     std::vector<int> simple;
     for (int k = at.start[v]; k < at.start[v + 1]; ++k) {

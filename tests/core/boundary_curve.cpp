@@ -76,7 +76,7 @@ TEST_CASE("pipeline: the boundary nodes end on the boundary curve, the panels as
     REQUIRE(r.solve.converged);
     CHECK(r.metrics.planarityMax <= 1e-9);
     CHECK(r.boundaryOffset.nodes > 50);
-    CHECK(r.solve.boundaryNodesPlaced > 50);
+    CHECK(r.solve.boundaryNodesPlaced > 20);  // the others on the curve already (the free nodes settled there)
     // In mean edges: every node on the catenoid; on the cyclide a few stay put where their line leaves the surface
     // steeply (a move may take no node farther off the surface than the farthest one).
     CHECK((name == "catenoid" ? r.boundaryOffset.max : r.boundaryOffset.median) <= 1e-3);
