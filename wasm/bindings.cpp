@@ -122,6 +122,7 @@ phex::PipelineParams paramsFromJs(const val& o) {
   if (has(o, "folds")) p.preventFolds = switchValue(o, "folds", "prevent", "allow");
   if (has(o, "surfaceFit")) p.fitSurface = switchValue(o, "surfaceFit", "on", "off");
   if (has(o, "splitBoundary")) p.splitBoundaryPanels = switchValue(o, "splitBoundary", "on", "off");
+  if (has(o, "clipBoundary")) p.clipBoundary = switchValue(o, "clipBoundary", "on", "off");
   if (has(o, "anisotropy")) p.anisotropy = number(o, "anisotropy");
   if (has(o, "alignment")) p.alignment = number(o, "alignment");
   if (has(o, "curvatureSizing")) p.curvatureSizing = number(o, "curvatureSizing");
@@ -262,6 +263,14 @@ val resultToJs(const phex::PipelineResult& r) {
   boundary.set("median", r.boundaryOffset.median);
   boundary.set("nodes", r.boundaryOffset.nodes);
   out.set("boundaryOffset", boundary);
+  val clip = val::object();
+  clip.set("panels", r.boundaryClip.panels);
+  clip.set("skipped", r.boundaryClip.skipped);
+  clip.set("nodesMoved", r.boundaryClip.nodesMoved);
+  clip.set("nodesAdded", r.boundaryClip.nodesAdded);
+  clip.set("nodesRemoved", r.boundaryClip.nodesRemoved);
+  clip.set("gapMax", r.boundaryClip.gapMax);
+  out.set("boundaryClip", clip);
   val origin = val::array();
   for (int k = 0; k < 3; ++k) origin.call<void>("push", r.origin(k));
   out.set("origin", origin);

@@ -401,7 +401,7 @@ function showSingularities(singularities) {
   dd.replaceChildren(String(singularities.index.length), ...parts.flatMap((span) => [' · ', span]), ` · sum ${sum}`);
 }
 
-function showStats({ metrics, solve, timings, method, field, triangulation, duality }) {
+function showStats({ metrics, solve, timings, method, field, triangulation, duality, boundaryClip, boundaryOffset }) {
   showNotes(triangulation?.notes ?? []);
   showSingularities(method === 'global' ? triangulation.singularities : null);
   const invalidStars = triangulation?.check?.invalidStars?.length;
@@ -430,6 +430,12 @@ function showStats({ metrics, solve, timings, method, field, triangulation, dual
       : `${metrics.convexityMismatchCount} off${metrics.parabolicFaceCount ? `, ${metrics.parabolicFaceCount} across K = 0` : ''}`;
   $('regularity-mean').textContent = metrics.regularityMean === undefined ? '–' : metrics.regularityMean.toFixed(3);
   $('surface-distance').textContent = Number.isFinite(metrics.surfaceDistanceMax) ? `${fmt(metrics.surfaceDistanceMax)} max` : '–';
+  $('edge-info').textContent = !boundaryOffset?.nodes
+    ? '–'
+    : [boundaryClip?.panels ? `${boundaryClip.panels} panels clipped` : null, boundaryClip?.skipped ? `${boundaryClip.skipped} not` : null,
+       boundaryClip?.panels ? `gap ${boundaryClip.gapMax.toFixed(3)} edges` : null, `nodes off ${boundaryOffset.max.toFixed(3)} edges max`]
+        .filter(Boolean)
+        .join(', ');
   $('iterations').textContent = `${solve.iterations}${solve.converged ? '' : ' (not converged)'}${
     solve.boundaryPanelsSplit ? `, ${solve.boundaryPanelsSplit} boundary panel${solve.boundaryPanelsSplit > 1 ? 's' : ''} split` : ''}${
     solve.interiorFacesSplit ? `, ${solve.interiorFacesSplit} interior face${solve.interiorFacesSplit > 1 ? 's' : ''} split` : ''}${

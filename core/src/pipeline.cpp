@@ -1504,6 +1504,12 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     }
   }
 
+  if (params.clipBoundary && !surface.boundaryCurves().empty()) {
+    report("clip", 0, "clipping the boundary panels to the boundary curve");
+    r.boundaryClip = clipBoundaryPanels(r.hex, surface);
+    clock.done("clip");
+  }
+
   report("measure", 0, "measuring");
   r.metrics = measure(r.hex, surface);
   {

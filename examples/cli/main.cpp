@@ -90,6 +90,9 @@ Options of `phex run`:
                             goes on; so are up to 8 interior faces left off planar, or all of
                             them on a surface laid in several systems of rows or where the solve
                             stalled (at most 1 in 20 faces) (default on)
+  --clip-boundary on|off    once solved, clip the boundary panels to the surface's boundary curve:
+                            their boundary edges follow the curve projected onto each panel's plane,
+                            so the edge panels can be cut as drawn (report: boundaryClip) (default on)
   --out FILE                write the P-Hex mesh (for triangulate: the triangulation, OBJ)
   --format obj|ply|json     output format (default from the extension, else obj); json carries
                             the per-face metrics
@@ -224,7 +227,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                  {"tolerance", p.tolerance}, {"lambda", p.lambda}, {"mu", p.mu}, {"maxIterations", p.maxIterations},
                  {"duality", phex::dualityName(p.duality)}, {"solver", phex::methodName(p.solver)},
                  {"folds", p.preventFolds ? "prevent" : "allow"}, {"surfaceFit", p.fitSurface ? "on" : "off"},
-                 {"splitBoundary", p.splitBoundaryPanels ? "on" : "off"}};
+                 {"splitBoundary", p.splitBoundaryPanels ? "on" : "off"}, {"clipBoundary", p.clipBoundary ? "on" : "off"}};
   if (p.start) params["start"] = {p.start->x(), p.start->y(), p.start->z()};
   if (p.direction) params["direction"] = {p.direction->x(), p.direction->y(), p.direction->z()};
   return {{"phex", "0.1.0"},
@@ -236,6 +239,9 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"coverageGap", r.coverageGap},
           {"boundaryOffset", {{"max", r.boundaryOffset.max}, {"median", r.boundaryOffset.median},
                               {"nodes", r.boundaryOffset.nodes}}},
+          {"boundaryClip", {{"panels", r.boundaryClip.panels}, {"skipped", r.boundaryClip.skipped},
+                            {"nodesMoved", r.boundaryClip.nodesMoved}, {"nodesAdded", r.boundaryClip.nodesAdded},
+                            {"nodesRemoved", r.boundaryClip.nodesRemoved}, {"gapMax", r.boundaryClip.gapMax}}},
           {"mesh", {{"vertices", r.metrics.vertexCount}, {"faces", r.metrics.faceCount}, {"facesBySize", bySize}}},
           {"planarity", {{"max", r.metrics.planarityMax}, {"mean", r.metrics.planarityMean},
                          {"initialMax", r.solve.initialPlanarityMax}}},
@@ -370,6 +376,7 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--folds") p.preventFolds = parseSwitch(a, value(), "prevent", "allow");
     else if (a == "--surface-fit") p.fitSurface = parseSwitch(a, value(), "on", "off");
     else if (a == "--split-boundary") p.splitBoundaryPanels = parseSwitch(a, value(), "on", "off");
+    else if (a == "--clip-boundary") p.clipBoundary = parseSwitch(a, value(), "on", "off");
     else if (a == "--out") out = value();
     else if (a == "--triangulation") tri = value();
     else if (a == "--panels") panels = value();

@@ -426,6 +426,14 @@ test("splitBoundary: 'on' cuts boundary panels left off planar and reaches the g
   assert.ok(after.metrics.planarityMax <= 1e-9);
 });
 
+test("clipBoundary: anything but 'on' or 'off' is named, and the module stays usable", async () => {
+  const error = await rejection({ surface: 'catenoid', clipBoundary: 'maybe' });
+  assert.equal(error.code, 'invalid_parameter');
+  assert.match(error.message, /clipBoundary/);
+  const after = await phex.run({ surface: 'catenoid', faces: 300, clipBoundary: 'off' });
+  assert.equal(after.boundaryClip.panels, 0);
+});
+
 test('the bumps are laid in several systems of rows and say so', async () => {
   // No one regular conjugate network reaches both bumps: further systems cover what the first left.
   const r = await phex.run({ surface: 'freeform', faces: 1000 });

@@ -96,11 +96,18 @@ test('boundary nodes end on the surface\'s boundary curve (a clean edge), and a 
   assert.ok(open.solve.converged);
   assert.ok(open.solve.boundaryNodesPlaced > 30, String(open.solve.boundaryNodesPlaced));
   assert.ok(open.boundaryOffset.nodes > 30 && open.boundaryOffset.max <= 1e-3, JSON.stringify(open.boundaryOffset));
-  const raw = await phex.run({ surface: 'catenoid', method: 'global', faces: 600, surfaceFit: 'off' });
+  // The boundary panels clipped to the curve: planar, their outline within a tenth of an edge of the curve.
+  assert.ok(open.boundaryClip.panels > 30 && open.boundaryClip.skipped === 0, JSON.stringify(open.boundaryClip));
+  assert.ok(open.boundaryClip.nodesAdded > 30 && open.boundaryClip.gapMax < 0.1, JSON.stringify(open.boundaryClip));
+  assert.ok(open.metrics.planarityMax <= 1e-9);
+  const raw = await phex.run({ surface: 'catenoid', method: 'global', faces: 600, surfaceFit: 'off', clipBoundary: 'off' });
   assert.equal(raw.solve.boundaryNodesPlaced, 0);
   assert.ok(raw.boundaryOffset.median > 0.01, JSON.stringify(raw.boundaryOffset));
+  assert.equal(raw.boundaryClip.panels, 0);
+  assert.equal(raw.hex.faceOffsets.length, open.hex.faceOffsets.length);  // the same panels, their edges clipped
   const r = await globalBlob();
   assert.deepEqual(r.boundaryOffset, { max: 0, median: 0, nodes: 0 });
+  assert.equal(r.boundaryClip.panels, 0);
 });
 
 test('the other methods return no singular points', async () => {

@@ -38,8 +38,9 @@ async function main(): Promise<void> {
     const farNodes: number = result.farNodes;
     const coverageGap: number = result.coverageGap;
     const edgeOffset: number = result.boundaryOffset.max + result.solve.boundaryNodesPlaced;
+    const clipped: number = result.boundaryClip.panels + result.boundaryClip.gapMax;
     const stats: [number, number, number, number, boolean] = [hexagons, worst, positions.length + index.length, faceOfTriangle.length, result.solve.converged];
-    console.log(version, stats, farNodes, coverageGap, edgeOffset, areas.length, lines?.offsets.length, result.timings.total, result.solve.log.map((l) => l.planarityMax), meshToOBJ(result.initial).length);
+    console.log(version, stats, farNodes, coverageGap, edgeOffset, clipped, areas.length, lines?.offsets.length, result.timings.total, result.solve.log.map((l) => l.planarityMax), meshToOBJ(result.initial).length);
     console.log(meshToOBJ(result.triangulation).length, meshToPLY(result.hex, { planarity: result.metrics.planarity }).length, tooltips.length);
     const field = await phex.run(global);
     const singular: Singularities | undefined = field.triangulation.singularities;

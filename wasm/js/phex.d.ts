@@ -254,6 +254,12 @@ export interface Result {
    * height over it left out), in mean panel edges: 0 where the boundary panels end at the curve. Over `nodes`
    * boundary nodes (0 on a closed surface). */
   boundaryOffset: { max: number; median: number; nodes: number };
+  /** The boundary panels clipped to the boundary curve (`clipBoundary: 'on'`): `panels` clipped, `skipped`
+   * (their clipped outline would cross itself), nodes moved along their shared edge onto the curve, curve
+   * points added and one-panel boundary nodes they replaced, and `gapMax`: the edge as drawn, the largest distance
+   * from the curve to the mesh's outline (the curve's height over the clipped panels' planes; where panels could
+   * not be clipped, how far their edges stay from it), in mean panel edges, at most 2. All 0 on a closed surface. */
+  boundaryClip: { panels: number; skipped: number; nodesMoved: number; nodesAdded: number; nodesRemoved: number; gapMax: number };
   /** An upload far from the origin (more than ten times its size: site coordinates) is computed about the
    * centre of its box, this point, where its coordinates keep their digits; every mesh and note here is in the
    * file's coordinates all the same. [0, 0, 0] otherwise. */
@@ -341,6 +347,12 @@ export interface RunParams {
    */
   splitBoundary?: 'on' | 'off';
   /**
+   * 'on' (default): once solved, the boundary panels are clipped to the surface's boundary curve: their boundary
+   * edges follow the curve projected onto each panel's plane (so they stay planar), the nodes shared with their
+   * neighbours move along the shared edge onto it (`boundaryClip`). 'off': the boundary as the dual ends it.
+   */
+  clipBoundary?: 'on' | 'off';
+  /**
    * Triangulation method: 'auto' (default: the surface's recommended method, `SurfaceSpec.method`;
    * 'prespecified' for uploaded meshes, §7's geodesic route for a closed convex one, 'subdivision' for a closed convex polyhedron of fewer vertices than the faces asked for), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
    * conjugation along `field` (Method 2), 'subdivision' (Loop subdivision of a convex control mesh, §7:
@@ -377,7 +389,7 @@ export interface RunParams {
 
 /** A run parameter as listed in {@link PARAMETERS}. */
 export interface ParameterSpec {
-  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing';
+  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'clipBoundary' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing';
   /** 'point': an [x, y, z] array, or null for the default. */
   type: 'integer' | 'number' | 'enum' | 'field' | 'point';
   default: number | string | null;
@@ -438,7 +450,7 @@ export interface MemoryUse {
 
 /** One progress report of a run. */
 export interface Progress {
-  /** The stage: "triangulate", "dualize", "planarize", "measure" or "done". */
+  /** The stage: "triangulate", "dualize", "planarize", "clip", "measure" or "done". */
   stage: string;
   /** Progress within the stage, 0 .. 1. */
   fraction: number;

@@ -46,6 +46,8 @@ class BoundaryCurve {
   long long key(int i, int j, int k) const { return (static_cast<long long>(i) * dims_[1] + j) * dims_[2] + k; }
 };
 
+// The edges of `mesh` that belong to one face (its outline), as (smaller, larger) node pairs, sorted.
+std::vector<std::pair<int, int>> outlineEdges(const PolyMesh& mesh);
 // The nodes of `mesh` on its boundary (ends of edges of one face).
 std::vector<char> boundaryNodes(const PolyMesh& mesh);
 
@@ -56,5 +58,32 @@ struct BoundaryOffset {
   int nodes = 0;  // boundary nodes measured
 };
 BoundaryOffset boundaryOffset(const PolyMesh& mesh, const Surface& surface);
+
+// Boundary panels clipped to the boundary curve (PipelineParams::clipBoundary), so that the edge panels can be
+// cut as drawn. Each run of a panel's boundary edges (from node a to node b, the nodes it shares with the
+// neighbouring boundary panels) is replaced by the boundary curve between a and b, projected onto the panel's
+// plane: the panel stays planar, and its edge follows the curve up to the curve's height over that plane. The
+// shared nodes a and b first move along the edge they share with the neighbouring panel (the line where the two
+// planes meet, so both stay planar) onto the curve's wall (the ribbon of surface normals along it), at most
+// kClipReach mean edges and no farther off the surface than the farthest node already is; where that line runs
+// along the wall, or the move would fold a panel, the node stays and the curve starts at its nearest point. The
+// curve's points are thinned (Douglas-Peucker) to kClipTolerance mean edges, kept at least kClipSpacing apart, and
+// those standing higher over the panel's plane than a moved node may lie off the surface left out. A panel whose clipped polygon would
+// cross itself or turn over keeps its boundary edges as they were (`skipped`).
+constexpr double kClipReach = 1.5;
+constexpr double kClipTolerance = 0.005;
+constexpr double kClipSpacing = 0.2;
+struct BoundaryClip {
+  int panels = 0;        // boundary panels whose boundary edges now follow the curve
+  int skipped = 0;       // boundary panels left as they were
+  int nodesMoved = 0;    // nodes moved along their shared edge onto the curve's wall
+  int nodesAdded = 0;    // points of the curve added to the panels
+  int nodesRemoved = 0;  // boundary nodes of one panel replaced by the curve
+  // The edge as drawn: the largest distance of the curve's points to the P-Hex mesh's outline (the edges of one
+  // panel), in mean edges (at most 2): the curve's height over the clipped panels' planes and the thinning, and
+  // where panels could not be clipped, how far their edges stay from it.
+  double gapMax = 0;
+};
+BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface);
 
 }  // namespace phex

@@ -84,6 +84,10 @@ struct PipelineParams {
   // same way (PipelineResult::interiorFacesSplit); on a surface laid in several systems of rows (its seams
   // and rows along parabolic rings leave more such faces: round bumps) every interior face left off is.
   bool splitBoundaryPanels = true;
+  // Once solved, the boundary panels are clipped to the surface's boundary curve (clipBoundaryPanels): their
+  // boundary edges follow the curve, projected onto each panel's plane, and the nodes they share with their
+  // neighbours move along the shared edge onto it. PipelineResult::boundaryClip counts them.
+  bool clipBoundary = true;
   // The global method's field (GlobalOptions): the Dupin metric's largest anisotropy followed, in [1, 8]; the
   // weight of the principal alignment, in [0, 10]; how far the cell follows the curvature, in [0, 1] (0: uniform).
   double anisotropy = 1.5;
@@ -124,6 +128,7 @@ struct PipelineResult {
   // How far the boundary nodes of `hex` lie from the surface's boundary curve across the surface (leaving out
   // their height over it), in mean edges: a clean edge has them on it, so the boundary panels end at the curve.
   BoundaryOffset boundaryOffset;
+  BoundaryClip boundaryClip;  // the boundary panels clipped to the curve (PipelineParams::clipBoundary)
   double interiorHexagonFraction = 0.0;  // hexagons among the faces not on the boundary (dual.boundaryFace)
   PlanarizeReport solve;
   int boundaryPanelsSplit = 0;  // boundary panels cut in two to become planar (PipelineParams::splitBoundaryPanels)

@@ -7,7 +7,7 @@
 namespace phex {
 
 struct Progress {
-  std::string stage;     // "triangulate", "dualize", "planarize", "measure"
+  std::string stage;     // "triangulate", "dualize", "planarize", "clip", "measure"
   double fraction = 0;   // 0..1 within the stage
   std::string message;   // e.g. "round 2, iteration 5, planarity 3.1e-07"
 };
