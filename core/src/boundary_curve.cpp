@@ -302,7 +302,7 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
   struct Clipped {
     std::vector<int> ids;
     std::vector<Vec3> added;
-    std::vector<std::pair<int, int>> junctions;  // (node, index in the face) of the runs' ends
+    std::vector<int> junctions;  // the runs' ends
     bool ok = false;
   };
   std::vector<std::vector<ClipEnd>> cache(2, std::vector<ClipEnd>(static_cast<std::size_t>(V)));
@@ -371,24 +371,24 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
       }
       piece.push_back(eb.c);
       const std::vector<char> keep = thinPolyline(piece, kClipTolerance * h);
-      c.junctions.emplace_back(a, static_cast<int>(c.ids.size()));
+      c.junctions.push_back(a);
       c.ids.push_back(a);
       position.push_back(ea.w);
-      std::vector<Vec3> edge{ea.w};  // the run's new corners so far
+      Vec3 last = ea.w;  // the run's last corner so far
       for (std::size_t q = 1; q + 1 < piece.size(); ++q) {
         if (!keep[q]) continue;
         const Vec3 x = project(piece[q]);
         // Not nearer than kClipSpacing to the corner before or the run's end (short edges would make the panel's
         // planarity, relative to its mean edge, look worse than it is), nor farther off the surface than the
         // moved nodes may go (the curve stands that high over the panel's plane there).
-        if ((x - edge.back()).norm() < kClipSpacing * h || (x - eb.w).norm() < kClipSpacing * h) continue;
+        if ((x - last).norm() < kClipSpacing * h || (x - eb.w).norm() < kClipSpacing * h) continue;
         if ((x - piece[q]).norm() > farthest) continue;
         c.ids.push_back(-1 - static_cast<int>(c.added.size()));
         c.added.push_back(x);
         position.push_back(x);
-        edge.push_back(x);
+        last = x;
       }
-      c.junctions.emplace_back(b, -1);  // b follows as the next interior-edge node
+      c.junctions.push_back(b);  // b follows as the next interior-edge node
       k = j;
     }
     // In the plane: simple, turning as the panel did, and its fan from the first corner inside it (the viewers
@@ -456,7 +456,7 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
       if (nodeFaces[id] == 1 && std::find(c.ids.begin(), c.ids.end(), id) == c.ids.end()) ++out.nodesRemoved;
     ids.clear();
     for (int id : c.ids) ids.push_back(id >= 0 ? id : base - 1 - id);
-    for (const auto& [a, at] : c.junctions) {
+    for (int a : c.junctions) {
       const ClipEnd& e = cache[fixed[a] ? 1 : 0][a];
       if (e.moved && !moved[a]) points[a] = e.w, moved[a] = 1, ++out.nodesMoved;
     }
