@@ -1106,11 +1106,9 @@ int placeBoundaryNodes(PolyMesh& mesh, const Surface& surface, const CancelFlag*
 
 }  // namespace
 
-PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const ProgressFn& progress,
-                          const CancelFlag* cancel) {
-  const Points initial = mesh.V;
-  PlanarizeReport report = solvePlanarity(mesh, options, progress, cancel);
-  if (options.fitSurface && options.surface && report.converged) {
+void fitPlanarMeshToSurface(PolyMesh& mesh, const PlanarizeOptions& options, PlanarizeReport& report,
+                            const ProgressFn& progress, const CancelFlag* cancel) {
+  if (options.surface && report.converged) {
     if (progress) progress({"planarize", 1.0, "shifting the face planes towards the surface"});
     const Points planar = mesh.V;
     const double diagonal = options.surface->bounds().diagonal().norm();
@@ -1165,6 +1163,13 @@ PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const
       report.surfaceDistanceAfter = after / diagonal;
     }
   }
+}
+
+PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const ProgressFn& progress,
+                          const CancelFlag* cancel) {
+  const Points initial = mesh.V;
+  PlanarizeReport report = solvePlanarity(mesh, options, progress, cancel);
+  if (options.fitSurface) fitPlanarMeshToSurface(mesh, options, report, progress, cancel);
   const double h = mesh.meanEdgeLength();
   if (h > 0 && mesh.V.rows() > 0) report.displacementMax = (mesh.V - initial).rowwise().norm().maxCoeff() / h;
   return report;

@@ -129,6 +129,33 @@ test('triangulateFaces fans each polygon from its first corner', () => {
   assert.equal(tri.index.length, 3 * tri.faceOfTriangle.length);
 });
 
+test('triangulateFaces cuts a non-convex face into ears that stay inside it', () => {
+  // A hexagon with a notch at corner 4 (2, 0.5), in a tilted plane z = x + y: fanned from corner 0 the triangle
+  // (0, 3, 4) would turn the other way and cover the notch.
+  const flat = [[0, 0], [2, -1], [4, 0], [4, 2], [2, 0.5], [0, 2]];
+  const positions = new Float64Array(flat.flatMap(([x, y]) => [x, y, x + y]));
+  const hexagon = { positions, faceOffsets: new Uint32Array([0, 6]), faceIndices: new Uint32Array([0, 1, 2, 3, 4, 5]) };
+  const { index, faceOfTriangle } = triangulateFaces(hexagon);
+  assert.equal(faceOfTriangle.length, 4);
+  const signed = (a, b, c) => ((flat[b][0] - flat[a][0]) * (flat[c][1] - flat[a][1]) - (flat[b][1] - flat[a][1]) * (flat[c][0] - flat[a][0])) / 2;
+  let area = 0;
+  for (let t = 0; t < 4; t++) {
+    const s = signed(index[3 * t], index[3 * t + 1], index[3 * t + 2]);
+    assert.ok(s > 0, `triangle ${t} turns the other way (${s})`);
+    area += s;
+  }
+  let polygon = 0;
+  for (let i = 0; i < 6; i++) polygon += signed(0, i, (i + 1) % 6);
+  assert.ok(Math.abs(area - polygon) < 1e-12, `triangles cover ${area}, the face ${polygon}`);
+  // Each corner is used, the notch's included.
+  assert.deepEqual([...new Set(index)].sort(), [0, 1, 2, 3, 4, 5]);
+
+  // Corners listed clockwise (the face seen from its back): the triangles turn clockwise too.
+  const back = { positions, faceOffsets: new Uint32Array([0, 6]), faceIndices: new Uint32Array([5, 4, 3, 2, 1, 0]) };
+  const reversed = triangulateFaces(back).index;
+  for (let t = 0; t < 4; t++) assert.ok(signed(reversed[3 * t], reversed[3 * t + 1], reversed[3 * t + 2]) < 0);
+});
+
 test('meshToOBJ writes the vertices and 1-based faces', () => {
   const text = meshToOBJ(torus.hex);
   const lines = text.trimEnd().split('\n');

@@ -736,7 +736,11 @@ export interface TriangulatedFaces {
   faceOfTriangle: Uint32Array;
 }
 
-/** Fan-triangulates each face (n corners → n − 2 triangles from its first corner), for THREE.BufferGeometry. */
+/**
+ * Triangulates each face (n corners → n − 2 triangles turning as the face does), for THREE.BufferGeometry: a
+ * convex face as a fan from its first corner, a non-convex one (saddle-shaped hexagons, clipped boundary panels)
+ * by ear clipping in its plane, so that no triangle covers what lies outside the face.
+ */
 export function triangulateFaces(mesh: Mesh): TriangulatedFaces;
 
 /** The mesh (or a triangulation) as Wavefront OBJ text with full double precision, in the format of `phex run --out`. */

@@ -451,8 +451,11 @@ export async function createPHex(options = {}) {
 }
 
 /**
- * Fan-triangulates a polygon mesh for rendering: face f with n corners becomes n - 2 triangles
- * (v0, vi, vi+1). Positions are converted to single precision, as GPUs want them.
+ * Triangulates a polygon mesh for rendering: face f with n corners becomes n - 2 triangles, each turning as
+ * the face does. A convex face is fanned from its first corner (v0, vi, vi+1); a non-convex one (the hexagons
+ * of a P-Hex mesh where the surface is saddle-shaped, K < 0, have two reflex corners; a boundary panel clipped
+ * to a curve may have more) is cut into ears in its plane, so that no triangle covers what lies outside the
+ * face. Positions are converted to single precision, as GPUs want them.
  */
 export function triangulateFaces(mesh) {
   const { positions, faceOffsets, faceIndices } = mesh;
@@ -461,17 +464,124 @@ export function triangulateFaces(mesh) {
   for (let f = 0; f < faceCount; f++) triangleCount += Math.max(0, faceOffsets[f + 1] - faceOffsets[f] - 2);
   const index = new Uint32Array(triangleCount * 3);
   const faceOfTriangle = new Uint32Array(triangleCount);
+  const polygon = { x: [], y: [], corner: [] };
   let t = 0;
+  const emit = (f, a, b, c) => {
+    index[3 * t] = a;
+    index[3 * t + 1] = b;
+    index[3 * t + 2] = c;
+    faceOfTriangle[t++] = f;
+  };
   for (let f = 0; f < faceCount; f++) {
     const first = faceOffsets[f];
-    for (let i = first + 1; i + 1 < faceOffsets[f + 1]; i++, t++) {
-      index[3 * t] = faceIndices[first];
-      index[3 * t + 1] = faceIndices[i];
-      index[3 * t + 2] = faceIndices[i + 1];
-      faceOfTriangle[t] = f;
+    const n = faceOffsets[f + 1] - first;
+    if (n < 3) continue;
+    if (n > 3 && projectFace(positions, faceIndices, first, n, polygon) && !isConvex(polygon, n)) {
+      clipEars(polygon, n, (a, b, c) => emit(f, a, b, c));
+      continue;
     }
+    for (let i = first + 1; i + 1 < first + n; i++) emit(f, faceIndices[first], faceIndices[i], faceIndices[i + 1]);
   }
   return { positions: Float32Array.from(positions), index, faceOfTriangle };
+}
+
+/**
+ * The face's corners in 2D (`out.x`, `out.y`, `out.corner` = vertex ids), in a basis of its plane oriented so
+ * that the face turns counter-clockwise: the plane's normal by Newell's method (the face's vector area). False
+ * for a face with no area.
+ */
+function projectFace(p, faceIndices, first, n, out) {
+  let nx = 0;
+  let ny = 0;
+  let nz = 0;
+  for (let i = 0; i < n; i++) {
+    const a = 3 * faceIndices[first + i];
+    const b = 3 * faceIndices[first + ((i + 1) % n)];
+    nx += (p[a + 1] - p[b + 1]) * (p[a + 2] + p[b + 2]);
+    ny += (p[a + 2] - p[b + 2]) * (p[a] + p[b]);
+    nz += (p[a] - p[b]) * (p[a + 1] + p[b + 1]);
+  }
+  const length = Math.hypot(nx, ny, nz);
+  if (!(length > 0)) return false;
+  nx /= length;
+  ny /= length;
+  nz /= length;
+  // u: any unit vector across the normal; v = n x u.
+  let ux = 0;
+  let uy = 0;
+  let uz = 0;
+  if (Math.abs(nx) < 0.9) [ux, uy, uz] = [0, -nz, ny];
+  else [ux, uy, uz] = [nz, 0, -nx];
+  const ul = Math.hypot(ux, uy, uz);
+  ux /= ul;
+  uy /= ul;
+  uz /= ul;
+  const vx = ny * uz - nz * uy;
+  const vy = nz * ux - nx * uz;
+  const vz = nx * uy - ny * ux;
+  out.x.length = out.y.length = out.corner.length = n;
+  for (let i = 0; i < n; i++) {
+    const id = faceIndices[first + i];
+    const a = 3 * id;
+    out.x[i] = p[a] * ux + p[a + 1] * uy + p[a + 2] * uz;
+    out.y[i] = p[a] * vx + p[a + 1] * vy + p[a + 2] * vz;
+    out.corner[i] = id;
+  }
+  return true;
+}
+
+/** Twice the signed area of triangle (a, b, c) of the projected polygon. */
+function turn(x, y, a, b, c) {
+  return (x[b] - x[a]) * (y[c] - y[a]) - (y[b] - y[a]) * (x[c] - x[a]);
+}
+
+/** No corner of the (counter-clockwise) projected polygon turns clockwise. */
+function isConvex({ x, y }, n) {
+  for (let i = 0; i < n; i++) if (turn(x, y, (i + n - 1) % n, i, (i + 1) % n) < 0) return false;
+  return true;
+}
+
+/**
+ * Ear clipping of the counter-clockwise projected polygon: a corner turning counter-clockwise whose triangle
+ * with its two neighbours holds no other remaining corner is cut off, then its neighbours are looked at again.
+ * A polygon left with no ear (one crossing itself) is fanned from what remains, so the count stays n - 2.
+ */
+function clipEars({ x, y, corner }, n, emit) {
+  const next = new Int32Array(n);
+  const prev = new Int32Array(n);
+  for (let i = 0; i < n; i++) {
+    next[i] = (i + 1) % n;
+    prev[i] = (i + n - 1) % n;
+  }
+  const inside = (a, b, c, q) => turn(x, y, a, b, q) >= 0 && turn(x, y, b, c, q) >= 0 && turn(x, y, c, a, q) >= 0;
+  const isEar = (b) => {
+    const a = prev[b];
+    const c = next[b];
+    if (!(turn(x, y, a, b, c) > 0)) return false;
+    for (let q = next[c]; q !== a; q = next[q]) {
+      // A corner at the same place as one of the ear's (a polygon touching itself) does not block it.
+      const same = (x[q] === x[a] && y[q] === y[a]) || (x[q] === x[b] && y[q] === y[b]) || (x[q] === x[c] && y[q] === y[c]);
+      if (!same && inside(a, b, c, q)) return false;
+    }
+    return true;
+  };
+  let left = n;
+  let b = 0;
+  let tried = 0; // corners looked at since the last ear
+  while (left > 3 && tried < left) {
+    if (isEar(b)) {
+      emit(corner[prev[b]], corner[b], corner[next[b]]);
+      next[prev[b]] = next[b];
+      prev[next[b]] = prev[b];
+      b = prev[b];
+      left--;
+      tried = 0;
+    } else {
+      b = next[b];
+      tried++;
+    }
+  }
+  for (let c = next[b]; next[c] !== b; c = next[c]) emit(corner[b], corner[c], corner[next[c]]);
 }
 
 /** Face corners of a polygon mesh, or of a triangulation ({positions, triangles}) as a mesh of triangles. */

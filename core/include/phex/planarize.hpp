@@ -90,4 +90,10 @@ struct PlanarizeReport {
 PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const ProgressFn& progress = {},
                           const CancelFlag* cancel = nullptr);
 
+// The surface fit of PlanarizeOptions::fitSurface alone (whatever that flag says), on a mesh the solve left planar
+// to the tolerance (report.converged; else nothing is done): the face planes shifted towards the surface, then
+// the free and boundary nodes placed; fills the report's surface fields. planarize() ends with it.
+void fitPlanarMeshToSurface(PolyMesh& mesh, const PlanarizeOptions& options, PlanarizeReport& report,
+                            const ProgressFn& progress = {}, const CancelFlag* cancel = nullptr);
+
 }  // namespace phex

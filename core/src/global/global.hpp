@@ -141,7 +141,11 @@ int singularityIndex(const FieldMesh& mesh, const std::vector<Vec3>& q, int i, i
 // Per vertex of the field mesh, the factor of the cell that makes the lattice along the field `q` integrable where
 // it can be (scale.cpp): e^phi with grad phi = -J omega in least squares, omega the field's turn against parallel
 // transport, `strength` in [0, 1] scaling omega (0: uniform cells). Normalized to the uniform cell's mean area.
-std::vector<double> integrableScale(const FieldMesh& mesh, const std::vector<Vec3>& q, double strength);
+// Up to `directLimit` vertices of the mesh it is solved on (the coarse mesh the field mesh refines) its normal
+// equations are factorized; above, solved by conjugate gradients, preconditioned on aggregates of vertices.
+constexpr int kDirectScale = 50000;
+std::vector<double> integrableScale(const FieldMesh& mesh, const std::vector<Vec3>& q, double strength,
+                                    int directLimit = kDirectScale);
 
 // The position field: per vertex of level 0, the lattice point nearest to it (a point of its tangent plane) of
 // the triangular lattice of edge cell * scale along the field's directions (Dupin frame).
