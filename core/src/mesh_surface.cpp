@@ -699,6 +699,12 @@ TriMesh MeshSurface::refined(int k) const {
   return out;
 }
 
+void MeshSurface::setRefinement(const TriMesh& coarse, int k) {
+  if (k < 1 || double(coarse.F.rows()) * k * k != double(mesh_.F.rows()) || coarse.V.rows() > mesh_.V.rows())
+    throw Error(ErrorCode::InvalidParameter, "the mesh is not this refinement of the coarse one");
+  refinement_ = {coarse.F, static_cast<int>(coarse.V.rows()), k};
+}
+
 double MeshSurface::estimateCurvature(int minRings) {
   const int nv = vertexCount();
   const std::vector<Vec3> trialNormal = trialNormals();

@@ -239,7 +239,9 @@ std::shared_ptr<const MeshSurface> refinedUpload(const std::shared_ptr<const Mes
     if (cache.surface == coarse && cache.refined && cache.refinedBy == k) return cache.refined;
     if (cache.surface == coarse) cache.refined.reset();
   }
-  auto refined = std::make_shared<const MeshSurface>(coarse->refined(k), coarse->name());
+  auto made = std::make_shared<MeshSurface>(coarse->refined(k), coarse->name());
+  made->setRefinement(coarse->mesh(), k);
+  std::shared_ptr<const MeshSurface> refined = std::move(made);
   const std::lock_guard<std::mutex> lock(cache.mutex);
   if (cache.surface == coarse) cache.refined = refined, cache.refinedBy = k;
   return refined;

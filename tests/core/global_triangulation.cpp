@@ -15,6 +15,7 @@
 #include "phex/parallel.hpp"
 #include "phex/pipeline.hpp"
 #include "phex/surfaces.hpp"
+#include "phex/triangulation.hpp"
 
 using namespace phex;
 
@@ -298,4 +299,40 @@ TEST_CASE("global field: the integrable scale solved iteratively equals the fact
   }
   CHECK(hi / lo > 1.2);  // the torus' cells do grow outwards: there is a scale to find
   CHECK(apart < 1e-6);
+}
+
+// An upload refined k x k for a fine lay (MeshSurface::refined, setRefinement): the field mesh's coarse mesh, on
+// which the cell's scale is solved, is the upload itself, and every field-mesh vertex's place is carried into
+// the upload's triangle holding it.
+TEST_CASE("global field: on an upload refined k x k the coarse mesh is the upload, places carried into its triangles") {
+  const auto torus = makeSurface("torus");
+  const TriMesh upload = latticeTriangulation(*torus, 0.25).mesh;
+  MeshSurface plain(upload, "torus");
+  MeshSurface refined(plain.refined(3), "torus refined");
+  CHECK_THROWS_AS(refined.setRefinement(upload, 2), Error);  // not that refinement
+  refined.setRefinement(upload, 3);
+  const global::FieldMesh m = global::fieldMesh(refined, 0.03, 1.5, nullptr);
+  REQUIRE(m.coarse.V.rows() == upload.V.rows());
+  REQUIRE(m.coarse.F.rows() == upload.F.rows());
+  CHECK(m.vertexCount() > 9 * upload.V.rows());
+  double size = 0;  // the upload's longest edge
+  for (int f = 0; f < upload.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) size = std::max(size, (upload.V.row(upload.F(f, c)) - upload.V.row(upload.F(f, (c + 1) % 3))).norm());
+  int checked = 0;
+  double worst = 0, outside = 0;
+  for (int v = static_cast<int>(upload.V.rows()); v < m.vertexCount(); ++v) {
+    const auto& [f, b] = m.where[v];
+    REQUIRE(f >= 0);
+    REQUIRE(f < upload.F.rows());
+    outside = std::max({outside, -b.minCoeff(), std::abs(b.sum() - 1)});
+    Vec3 flat = Vec3::Zero();
+    for (int c = 0; c < 3; ++c) flat += b(c) * upload.V.row(upload.F(f, c)).transpose();
+    worst = std::max(worst, (flat - m.point(v)).norm());
+    ++checked;
+  }
+  CHECK(checked > 0);
+  CHECK(outside < 1e-9);
+  // The refined points lie on the jets' blend over the flat triangle: off it by a fraction of its size, where a
+  // wrong triangle would be a triangle or more away.
+  CHECK(worst < 0.2 * size);
 }

@@ -293,6 +293,27 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, cons
         geo[v] = v < base.V.rows() ? mesh->vertexGeometry(v) : mesh->geometryInTriangle(m.where[v].first, m.where[v].second);
     });
     m.coarse = base;
+    // A refinement of a coarser upload (refined(k), k x k per triangle, in order): that upload is the coarse
+    // mesh, each field-mesh vertex's place carried from the refined triangle into its upload triangle.
+    const MeshSurface::Refinement& from = mesh->refinement();
+    if (from.k > 1 && from.F.rows() * from.k * from.k == base.F.rows()) {
+      const int r = from.k;
+      // Per triangle of one split, its corners' barycentric coordinates in the triangle split (refined()'s order).
+      std::vector<std::array<Vec3, 3>> corners;
+      auto grid = [r](int i, int j) { return Vec3(double(r - i - j) / r, double(i) / r, double(j) / r); };
+      for (int j = 0; j < r; ++j)
+        for (int i = 0; i + j < r; ++i) {
+          corners.push_back({grid(i, j), grid(i + 1, j), grid(i, j + 1)});
+          if (i + j + 1 < r) corners.push_back({grid(i + 1, j), grid(i + 1, j + 1), grid(i, j + 1)});
+        }
+      for (std::pair<int, Vec3>& w : m.where) {
+        if (w.first < 0) continue;
+        const std::array<Vec3, 3>& c = corners[static_cast<std::size_t>(w.first % (r * r))];
+        w = {w.first / (r * r), w.second(0) * c[0] + w.second(1) * c[1] + w.second(2) * c[2]};
+      }
+      m.coarse.V = base.V.topRows(from.vertices);
+      m.coarse.F = from.F;
+    }
     m.V = std::move(fine.V);
     m.F = std::move(fine.F);
   } else if (const auto* parametric = dynamic_cast<const ParametricSurface*>(&surface)) {
