@@ -124,6 +124,7 @@ phex::PipelineParams paramsFromJs(const val& o) {
   if (has(o, "splitBoundary")) p.splitBoundaryPanels = switchValue(o, "splitBoundary", "on", "off");
   if (has(o, "clipBoundary")) p.clipBoundary = switchValue(o, "clipBoundary", "on", "off");
   if (has(o, "anisotropy")) p.anisotropy = number(o, "anisotropy");
+  if (has(o, "foldFlips")) p.foldFlips = switchValue(o, "foldFlips", "on", "off");
   if (has(o, "alignment")) p.alignment = number(o, "alignment");
   if (has(o, "curvatureSizing")) p.curvatureSizing = number(o, "curvatureSizing");
   return p;
@@ -348,7 +349,7 @@ val capabilities() {
   for (const char* f : {"principal", "angle:DEG", "param", "radial", "diverging", "spiral", "section"}) fields.call<void>("push", std::string(f));
   c.set("fields", fields);
   c.set("lowerBound", true);
-  c.set("globalOptions", true);  // anisotropy, alignment, curvatureSizing
+  c.set("globalOptions", true);  // anisotropy, alignment, curvatureSizing, foldFlips
   val controls = val::array();
   for (const std::string& n : phex::subdivisionControls()) controls.call<void>("push", n);
   c.set("subdivisionControls", controls);

@@ -57,6 +57,9 @@ Options of `phex run`:
   --alignment W             global: weight of the alignment with the flatter principal direction, 0..10
                             (default 1; 0 leaves the field free but for the boundary)
   --curvature-sizing S      global: how far the cell follows the curvature, 0..1 (default 0: uniform)
+  --fold-flips on|off       global: where the dual solved with folds allowed has faces crossing themselves
+                            (at most 8 % of them), flip an edge of each one's star and solve again: fewer
+                            faces cut later, each cut making two nodes of four faces (default on)
   --field SPEC              direction field: principal (default; under --method auto the surface's
                             recommended field; on a dome whose curvature lines turn around an umbilic,
                             section), angle:DEG, param, radial, diverging[:DEG], spiral[:DEG],
@@ -228,7 +231,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                  {"tolerance", p.tolerance}, {"lambda", p.lambda}, {"mu", p.mu}, {"maxIterations", p.maxIterations},
                  {"duality", phex::dualityName(p.duality)}, {"solver", phex::methodName(p.solver)},
                  {"folds", p.preventFolds ? "prevent" : "allow"}, {"surfaceFit", p.fitSurface ? "on" : "off"},
-                 {"splitBoundary", p.splitBoundaryPanels ? "on" : "off"}, {"clipBoundary", p.clipBoundary ? "on" : "off"}};
+                 {"splitBoundary", p.splitBoundaryPanels ? "on" : "off"}, {"clipBoundary", p.clipBoundary ? "on" : "off"},
+                 {"foldFlips", p.foldFlips ? "on" : "off"}};
   if (p.start) params["start"] = {p.start->x(), p.start->y(), p.start->z()};
   if (p.direction) params["direction"] = {p.direction->x(), p.direction->y(), p.direction->z()};
   return {{"phex", "0.1.0"},
@@ -357,6 +361,7 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--field") p.field = value();
     else if (a == "--lower-bound") p.lowerBound = parseNumber(a, value());
     else if (a == "--anisotropy") p.anisotropy = parseNumber(a, value());
+    else if (a == "--fold-flips") p.foldFlips = parseSwitch(a, value(), "on", "off");
     else if (a == "--alignment") p.alignment = parseNumber(a, value());
     else if (a == "--curvature-sizing") p.curvatureSizing = parseNumber(a, value());
     else if (a == "--start") p.start = parseVector(a, value());

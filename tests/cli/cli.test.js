@@ -100,6 +100,7 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--surface-fit', 'maybe'], /--surface-fit must be on or off/],
     [['run', '--split-boundary', 'maybe'], /--split-boundary must be on or off/],
     [['run', '--clip-boundary', 'sometimes'], /--clip-boundary must be on or off/],
+    [['run', '--fold-flips', 'sometimes'], /--fold-flips must be on or off/],
     [['run', '--start', '1,2'], /--start expects X,Y,Z/],
     [['run', '--direction', '0,0,0'], /direction must be a non-zero vector/],
     [['run', '--param', 'R'], /NAME=VALUE/],

@@ -22,6 +22,8 @@ test("the API offers method 'global' and documents its options with their defaul
     assert.deepEqual([spec[name].default, spec[name].min, spec[name].max], [value, min, max], name);
     assert.match(spec[name].description, /global/, name);
   }
+  assert.deepEqual([spec.foldFlips.default, spec.foldFlips.values, spec.foldFlips.requires], ['on', ['on', 'off'], 'globalOptions']);
+  assert.match(spec.foldFlips.description, /global/);
 });
 
 // The core's global method is still being tuned (issue 31): it reaches planarity by cutting some faces in two.
@@ -127,6 +129,7 @@ test("the global method's options out of range reject with a PHexError naming th
     [{ alignment: Number.NaN }, /alignment/],
     [{ curvatureSizing: 1.5 }, /curvatureSizing/],
     [{ curvatureSizing: -0.1 }, /curvatureSizing/],
+    [{ foldFlips: 'sometimes' }, /foldFlips/],
   ];
   for (const [options, message] of cases) {
     const error = await phex.run({ surface: 'torus', faces: 300, method: 'global', ...options }).then(
@@ -141,4 +144,13 @@ test("the global method's options out of range reject with a PHexError naming th
   const r = await phex.run({ surface: 'torus', faces: 300, method: 'global', anisotropy: 1, alignment: 0, curvatureSizing: 1 });
   assert.equal(r.method, 'global');
   assert.ok(r.metrics.faceCount > 150, String(r.metrics.faceCount));
+});
+
+test("foldFlips reaches the core: on the torus the notes say how many edges were flipped, and fewer faces are cut", async () => {
+  const r = await phex.run({ surface: 'torus', faces: 3000, method: 'global' });
+  assert.ok(r.triangulation.notes.some((n) => /edges flipped where the dual/.test(n)), r.triangulation.notes.join('\n'));
+  assert.ok(r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
+  const plain = await phex.run({ surface: 'torus', faces: 3000, method: 'global', foldFlips: 'off' });
+  assert.ok(!plain.triangulation.notes.some((n) => /edges flipped where the dual/.test(n)), 'none when off');
+  assert.ok(r.solve.interiorFacesSplit < plain.solve.interiorFacesSplit, `${r.solve.interiorFacesSplit} cut, ${plain.solve.interiorFacesSplit} without flips`);
 });

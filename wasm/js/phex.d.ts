@@ -353,8 +353,16 @@ export interface RunParams {
    */
   clipBoundary?: 'on' | 'off';
   /**
+   * Method 'global': where the dual, solved with folds allowed, has faces crossing themselves (next to parabolic
+   * curves; at most 8 % of the faces, so not on a coarse or noisy upload), an edge of each such face's star is
+   * flipped and the solve run again, twice at most ('on', default): fewer faces cut later, each cut making two
+   * nodes of four faces (on analytic surfaces at a point or two of hexagons and some time). 'off': the
+   * triangulation as the field gives it.
+   */
+  foldFlips?: 'on' | 'off';
+  /**
    * Triangulation method: 'auto' (default: the surface's recommended method, `SurfaceSpec.method`;
-   * 'prespecified' for uploaded meshes, §7's geodesic route for a closed convex one, 'subdivision' for a closed convex polyhedron of fewer vertices than the faces asked for), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
+   * for an uploaded mesh 'prespecified' where trial lays find one system of rows covering it, else 'global'; §7's geodesic route for a closed convex one, 'subdivision' for a closed convex polyhedron of fewer vertices than the faces asked for), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
    * conjugation along `field` (Method 2), 'subdivision' (Loop subdivision of a convex control mesh, §7:
    * `surface` names a built-in control or `mesh` is the control), 'lattice' (parameter rows), 'global' (any
    * surface, uploaded or analytic, of any genus and boundary: a 6-fold direction field in the Dupin metric, a
@@ -389,7 +397,7 @@ export interface RunParams {
 
 /** A run parameter as listed in {@link PARAMETERS}. */
 export interface ParameterSpec {
-  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'clipBoundary' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing';
+  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'clipBoundary' | 'foldFlips' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing';
   /** 'point': an [x, y, z] array, or null for the default. */
   type: 'integer' | 'number' | 'enum' | 'field' | 'point';
   default: number | string | null;
