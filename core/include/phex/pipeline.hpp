@@ -96,7 +96,7 @@ struct PipelineParams {
   // The global method's triangulation: where its dual, solved with folds allowed, has faces crossing themselves
   // (at most 8 % of them: not on a coarse or noisy upload), an edge of each such face's star flipped and the
   // solve run again, twice at most: fewer faces cut later (each cut makes two nodes of four faces). On the
-  // uploaded bumps at 3000-20000 faces 65-86 % fewer cuts, more hexagons and no more time; on analytic surfaces
+  // uploaded bumps at 3000-20000 faces 64-86 % fewer cuts, more hexagons, -15 to +14 % time; on analytic surfaces
   // laid by the global method fewer cuts too, but 0.5-2 points fewer hexagons and 15-30 % more time (METHOD.md).
   bool foldFlips = true;
 };
