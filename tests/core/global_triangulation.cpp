@@ -337,37 +337,47 @@ TEST_CASE("global field: on an upload refined k x k the coarse mesh is the uploa
   CHECK(worst < 0.2 * size);
 }
 
-// Edge flips against the folds (PipelineParams::foldFlips, on by default): on the torus at 3000 faces, whose
-// global lattice folds faces only next to its parabolic circles, fewer faces are cut and fewer nodes join four
-// faces (not at every size: METHOD.md); the triangulation's notes say how many edges were flipped, and every
-// face stays planar.
+namespace {
+
+// The pipeline run without and with the edge flips against folds (PipelineParams::foldFlips).
+std::pair<PipelineResult, PipelineResult> withoutAndWithFlips(PipelineParams p) {
+  p.foldFlips = false;
+  PipelineResult off = runPipeline(p);
+  p.foldFlips = true;
+  return {std::move(off), runPipeline(p)};
+}
+
+// Whether the triangulation's notes say that edges were flipped against folds.
+bool flippedAgainstFolds(const PipelineResult& r) {
+  for (const std::string& note : r.triangulation.notes)
+    if (note.find("edges flipped where the dual") != std::string::npos) return true;
+  return false;
+}
+
+}  // namespace
+
+// Edge flips against the folds (on by default): on the torus at 3000 faces, whose global lattice folds faces only
+// next to its parabolic circles, fewer faces are cut and fewer nodes join four faces (not at every size:
+// METHOD.md); the triangulation's notes say how many edges were flipped, and every face stays planar.
 TEST_CASE("pipeline: the global method's edge flips against folds cut fewer faces on the torus") {
   CHECK(PipelineParams().foldFlips);
   PipelineParams p;
   p.surface = "torus";
   p.method = TriangulationMethod::Global;
   p.faces = 3000;
-  p.foldFlips = false;
-  const PipelineResult off = runPipeline(p);
-  p.foldFlips = true;
-  const PipelineResult on = runPipeline(p);
+  const auto [off, on] = withoutAndWithFlips(p);
   auto fourOrMore = [](const PipelineResult& r) {
     int n = 0;
     for (const auto& [faces, count] : r.metrics.vertexValence) n += faces >= 4 ? count : 0;
     return n;
-  };
-  auto flipped = [](const PipelineResult& r) {
-    for (const std::string& note : r.triangulation.notes)
-      if (note.find("edges flipped where the dual") != std::string::npos) return true;
-    return false;
   };
   INFO("cut " << off.interiorFacesSplit << " -> " << on.interiorFacesSplit << ", nodes of 4+ " << fourOrMore(off) << " -> "
               << fourOrMore(on));
   CHECK(off.interiorFacesSplit > 20);  // there is something to mend
   CHECK(on.interiorFacesSplit < 0.75 * off.interiorFacesSplit);
   CHECK(fourOrMore(on) < fourOrMore(off));
-  CHECK(flipped(on));
-  CHECK_FALSE(flipped(off));
+  CHECK(flippedAgainstFolds(on));
+  CHECK_FALSE(flippedAgainstFolds(off));
   CHECK(on.metrics.planarityMax <= 1e-9);
   CHECK(on.metrics.selfIntersectingCount == 0);
 }
@@ -379,11 +389,8 @@ TEST_CASE("pipeline: no edge flips against folds on a coarse upload that folds m
   p.mesh = upload("phcpf_car_r.off");
   p.method = TriangulationMethod::Global;
   p.faces = 1000;
-  p.foldFlips = true;
-  const PipelineResult on = runPipeline(p);
-  p.foldFlips = false;
-  const PipelineResult off = runPipeline(p);
-  for (const std::string& note : on.triangulation.notes) CHECK(note.find("edges flipped where the dual") == std::string::npos);
+  const auto [off, on] = withoutAndWithFlips(p);
+  CHECK_FALSE(flippedAgainstFolds(on));
   CHECK(on.hex.faceCount() == off.hex.faceCount());
   CHECK(on.hex.V.rows() == off.hex.V.rows());
 }
