@@ -25,9 +25,15 @@ namespace {
 // as x + (y + z). Written out, every platform rounds alike.
 inline double dot(const Vec3& a, const Vec3& b) { return a.x() * b.x() + a.y() * b.y() + a.z() * b.z(); }
 inline double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
+// A vector whose squared length underflows (a triangle of 1e-88 in a mesh spanning 29: its cross product's
+// squares are under 1e-308) is scaled by its largest component first, or its "unit" vector comes out 5 % short.
 inline Vec3 normalized(const Vec3& a) {
   const double n = norm(a);
-  return n > 0 ? Vec3(a / n) : a;
+  if (n > 1e-140) return Vec3(a / n);
+  const double largest = std::max({std::abs(a.x()), std::abs(a.y()), std::abs(a.z())});
+  if (!(largest > 0)) return a;
+  const Vec3 s = a / largest;
+  return Vec3(s / norm(s));
 }
 inline Vec3 times(const Eigen::Matrix3d& M, const Vec3& v) {
   return Vec3(M(0, 0) * v.x() + M(0, 1) * v.y() + M(0, 2) * v.z(), M(1, 0) * v.x() + M(1, 1) * v.y() + M(1, 2) * v.z(),

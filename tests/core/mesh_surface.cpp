@@ -592,3 +592,23 @@ TEST_CASE("mesh_surface: a coarse mesh refined onto its vertices' cubic jets fol
   CHECK_THROWS_AS(small.refined(0), Error);
   CHECK_THROWS_AS(small.refined(200), Error);  // 128 x 200^2 triangles: over kMaxRefinedTriangles
 }
+
+// A triangle of 1e-88 in a mesh spanning 29 (found by fuzzing, tests/fuzz/regressions): its cross product's
+// squares underflow, and its vertices' normals came out 5 % short of unit length.
+TEST_CASE("MeshSurface: the normals of a triangle whose squared sizes underflow are unit vectors") {
+  TriMesh m;
+  m.V.resize(6, 3);
+  m.V << 2.6408954017682027e-306, 29.000011444092024, 1.7800590917950747e-307,  //
+      2.1815451039654126e-289, 2.8030718100038307e-309, 2.0546950501092218e-81,    //
+      2.0546950501119882e-81, 2.054695050119359e-81, 2.0546950501119882e-81,       //
+      2.0546950501119882e-81, 2.0546950501119882e-81, 6.6104134635141346e-304,     //
+      2.0546951161518087e-81, 2.0546950501119882e-81, 2.0546950501119882e-81,      //
+      1.7804886252551794e-307, -5.3825823355527613e-169, -2.0001220703125853;
+  m.F.resize(2, 3);
+  m.F << 1, 3, 4, 2, 0, 5;
+  const MeshSurface s(m, "tiny");
+  for (int v = 0; v < s.vertexCount(); ++v) {
+    CAPTURE(v);
+    CHECK(std::abs(s.vertexGeometry(v).normal.norm() - 1) < 1e-12);
+  }
+}
