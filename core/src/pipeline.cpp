@@ -723,7 +723,8 @@ constexpr double kFoldFlipShare = 0.08;
 // edge already), the stars repaired, and the solve run again; kept while the folds drop by a tenth or more.
 // Every node stays one of three faces (the dual of a triangulation), where a cut of a folded face makes two
 // nodes of four. Returns the flips kept.
-int flipFoldsAway(Triangulation& t, const Surface& surface, const PipelineParams& params, const CancelFlag* cancel) {
+int flipFoldsAway(Triangulation& t, const Surface& surface, const PipelineParams& params, const ProgressFn& progress,
+                  const CancelFlag* cancel) {
   PlanarizeOptions po;
   po.method = PlanarizeMethod::LocalGlobal;
   po.lambda = params.lambda;
@@ -738,6 +739,8 @@ int flipFoldsAway(Triangulation& t, const Surface& surface, const PipelineParams
   int flips = 0, bestFlips = 0;
   for (int round = 0; round <= kFoldFlipRounds; ++round) {
     checkCancel(cancel);
+    if (progress)
+      progress({"triangulate", 0.9 + 0.03 * round, "edge flips against folds, solve " + std::to_string(round + 1)});
     const DualMesh dual = dupinDual(t, surface);
     PolyMesh hex = dual.mesh;
     planarize(hex, po, {}, cancel);
@@ -1202,7 +1205,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     }
   }
   if (params.method == TriangulationMethod::Global && !checked && params.foldFlips) {
-    if (const int flips = flipFoldsAway(t.triangulation, *t.surface, params, cancel); flips > 0)
+    if (const int flips = flipFoldsAway(t.triangulation, *t.surface, params, progress, cancel); flips > 0)
       t.triangulation.notes.push_back(std::to_string(flips) +
                                       " edges flipped where the dual, solved with folds allowed, had faces crossing "
                                       "themselves (each such face would otherwise be cut, making two nodes of four faces)");
