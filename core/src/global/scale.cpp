@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include <Eigen/Sparse>
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
 
 #include "global.hpp"
@@ -61,56 +62,73 @@ int aggregates2Ring(const std::vector<std::vector<int>>& adjacent, std::vector<i
   return count;
 }
 
-// K x = rhs (K symmetric positive definite, stored whole) on a large mesh: conjugate gradients preconditioned by a
-// symmetric two-grid cycle: a Gauss-Seidel sweep forwards, the correction solved on the aggregates (their rows and
-// columns summed: the Galerkin product for a piecewise-constant prolongation), a sweep backwards. False where the
-// aggregates' system cannot be factorized.
+// The preconditioner of conjugate gradients on K x = rhs (K symmetric positive definite, stored whole) on a large
+// mesh: a symmetric two-grid cycle, a Gauss-Seidel sweep forwards, the correction solved on the aggregates (their
+// rows and columns summed: the Galerkin product for a piecewise-constant prolongation), a sweep backwards. In
+// Eigen's preconditioner interface (set up before the solver's compute, which leaves it as it is).
+class TwoGrid {
+ public:
+  template <typename Matrix>
+  TwoGrid& analyzePattern(const Matrix&) { return *this; }
+  template <typename Matrix>
+  TwoGrid& factorize(const Matrix&) { return *this; }
+  template <typename Matrix>
+  TwoGrid& compute(const Matrix&) { return *this; }
+  Eigen::ComputationInfo info() { return coarse_.info(); }
+
+  // K's aggregates `of` (count of them) and its entries; false where their system cannot be factorized.
+  bool setUp(const std::vector<Eigen::Triplet<double>>& entries, const Eigen::SparseMatrix<double>& K,
+             const std::vector<int>& of, int count) {
+    K_ = &K, of_ = &of, count_ = count;
+    std::vector<Eigen::Triplet<double>> summed;
+    summed.reserve(entries.size());
+    for (const Eigen::Triplet<double>& e : entries) summed.emplace_back(of[e.row()], of[e.col()], e.value());
+    Eigen::SparseMatrix<double> Kc(count, count);
+    Kc.setFromTriplets(summed.begin(), summed.end());
+    coarse_.compute(Kc);
+    return coarse_.info() == Eigen::Success;
+  }
+
+  Eigen::VectorXd solve(const Eigen::VectorXd& r) const {
+    const Eigen::SparseMatrix<double>& K = *K_;
+    const std::vector<int>& of = *of_;
+    const int n = static_cast<int>(r.size());
+    // One Gauss-Seidel step on row v of K z = r (column v holds row v, K being symmetric).
+    auto relax = [&](Eigen::VectorXd& z, int v) {
+      double diagonal = 0, sum = r(v);
+      for (Eigen::SparseMatrix<double>::InnerIterator it(K, v); it; ++it)
+        if (it.row() == v) diagonal += it.value();
+        else sum -= it.value() * z(it.row());
+      if (diagonal > 0) z(v) = sum / diagonal;
+    };
+    Eigen::VectorXd z = Eigen::VectorXd::Zero(n);
+    for (int v = 0; v < n; ++v) relax(z, v);
+    const Eigen::VectorXd residual = r - K * z;
+    Eigen::VectorXd rc = Eigen::VectorXd::Zero(count_);
+    for (int v = 0; v < n; ++v) rc(of[v]) += residual(v);
+    const Eigen::VectorXd y = coarse_.solve(rc);
+    for (int v = 0; v < n; ++v) z(v) += y(of[v]);
+    for (int v = n - 1; v >= 0; --v) relax(z, v);
+    return z;
+  }
+
+ private:
+  const Eigen::SparseMatrix<double>* K_ = nullptr;
+  const std::vector<int>* of_ = nullptr;
+  int count_ = 0;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> coarse_;
+};
+
+// K x = rhs on a large mesh by Eigen's conjugate gradients, preconditioned by TwoGrid. False where the aggregates'
+// system cannot be factorized or the solution is not finite.
 bool solveTwoGrid(const std::vector<Eigen::Triplet<double>>& entries, const Eigen::SparseMatrix<double>& K,
                   const Eigen::VectorXd& rhs, const std::vector<int>& of, int count, Eigen::VectorXd& x) {
-  using Vector = Eigen::VectorXd;
-  const int n = static_cast<int>(rhs.size());
-  std::vector<Eigen::Triplet<double>> coarse;
-  coarse.reserve(entries.size());
-  for (const Eigen::Triplet<double>& e : entries) coarse.emplace_back(of[e.row()], of[e.col()], e.value());
-  Eigen::SparseMatrix<double> Kc(count, count);
-  Kc.setFromTriplets(coarse.begin(), coarse.end());
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(Kc);
-  if (solver.info() != Eigen::Success) return false;
-  // One Gauss-Seidel step on row v of K z = r (column v holds row v, K being symmetric).
-  auto relax = [&](const Vector& r, Vector& z, int v) {
-    double diagonal = 0, sum = r(v);
-    for (Eigen::SparseMatrix<double>::InnerIterator it(K, v); it; ++it)
-      if (it.row() == v) diagonal += it.value();
-      else sum -= it.value() * z(it.row());
-    if (diagonal > 0) z(v) = sum / diagonal;
-  };
-  auto precondition = [&](const Vector& r) {
-    Vector z = Vector::Zero(n);
-    for (int v = 0; v < n; ++v) relax(r, z, v);
-    const Vector residual = r - K * z;
-    Vector rc = Vector::Zero(count);
-    for (int v = 0; v < n; ++v) rc(of[v]) += residual(v);
-    const Vector y = solver.solve(rc);
-    for (int v = 0; v < n; ++v) z(v) += y(of[v]);
-    for (int v = n - 1; v >= 0; --v) relax(r, z, v);
-    return z;
-  };
-  x = Vector::Zero(n);
-  Vector r = rhs, z = precondition(r), p = z;
-  double rz = r.dot(z);
-  const double goal = kScaleResidual * rhs.norm();
-  for (int i = 0; i < kScaleIterations && r.norm() > goal; ++i) {
-    const Vector Kp = K * p;
-    const double pKp = p.dot(Kp);
-    if (!(pKp > 0)) break;
-    const double alpha = rz / pKp;
-    x += alpha * p;
-    r -= alpha * Kp;
-    z = precondition(r);
-    const double next = r.dot(z);
-    p = z + (next / rz) * p;
-    rz = next;
-  }
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper, TwoGrid> cg;
+  if (!cg.preconditioner().setUp(entries, K, of, count)) return false;
+  cg.setTolerance(kScaleResidual);
+  cg.setMaxIterations(kScaleIterations);
+  cg.compute(K);
+  x = cg.solve(rhs);
   return x.allFinite();
 }
 
