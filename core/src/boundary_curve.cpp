@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <tuple>
 
 #include "phex/metrics.hpp"
 #include "phex/planarize.hpp"
@@ -52,14 +53,19 @@ void BoundaryCurve::near(const Vec3& x, std::vector<int>& out) const {
   out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
-std::pair<Vec3, double> BoundaryCurve::nearest(const Vec3& x, const std::vector<int>& candidates) const {
-  std::pair<Vec3, double> best{x, std::numeric_limits<double>::infinity()};
+BoundaryCurve::Closest BoundaryCurve::closest(const Vec3& x, const std::vector<int>& candidates) const {
+  Closest best;
   for (int s : candidates) {
     const Vec3 p = closestPointOnSegment(x, segments_[s].a, segments_[s].b);
     const double d = (p - x).norm();
-    if (d < best.second) best = {p, d};
+    if (d < best.distance) best = {s, p, d};
   }
   return best;
+}
+
+std::pair<Vec3, double> BoundaryCurve::nearest(const Vec3& x, const std::vector<int>& candidates) const {
+  const Closest c = closest(x, candidates);
+  return {c.segment >= 0 ? c.point : x, c.distance};
 }
 
 std::pair<Vec3, double> BoundaryCurve::nearest(const Vec3& x) const {
@@ -71,13 +77,9 @@ std::pair<Vec3, double> BoundaryCurve::nearest(const Vec3& x) const {
 BoundaryCurve::Offset BoundaryCurve::offset(const Vec3& x, const std::vector<int>& candidates,
                                             const Surface& surface) const {
   Offset o;
-  double best = std::numeric_limits<double>::infinity();
-  for (int s : candidates) {
-    const Vec3 p = closestPointOnSegment(x, segments_[s].a, segments_[s].b);
-    const double d = (p - x).norm();
-    if (d < best) best = d, o.segment = s, o.point = p;
-  }
-  if (o.segment < 0) return o;
+  const Closest c = closest(x, candidates);
+  if (c.segment < 0) return o;
+  o.segment = c.segment, o.point = c.point;
   o.normal = surface.closestPoint(o.point).normal;
   const Vec3 r = x - o.point;
   o.across = (r - r.dot(o.normal) * o.normal).norm();
@@ -227,13 +229,10 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
   // The curve's point nearest x, as an end.
   auto onCurve = [&](const Vec3& x, ClipEnd& e) {
     curve.near(x, near);
-    double best = std::numeric_limits<double>::infinity();
-    for (int k : near) {
-      const Vec3 p = closestPointOnSegment(x, curve.segments()[k].a, curve.segments()[k].b);
-      const double d = (p - x).norm();
-      if (d < best) best = d, e.c = p, e.loop = segmentOf[k].first, e.segment = segmentOf[k].second;
-    }
-    if (e.loop < 0) return;
+    const BoundaryCurve::Closest nearest = curve.closest(x, near);
+    if (nearest.segment < 0) return;
+    e.c = nearest.point;
+    std::tie(e.loop, e.segment) = segmentOf[nearest.segment];
     const CurveLoop& L = loops[e.loop];
     e.s = L.at[e.segment] + (e.c - (*L.points)[e.segment]).norm();
   };

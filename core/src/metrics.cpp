@@ -30,6 +30,16 @@ bool segmentsCross(const Vec2& p, const Vec2& q, const Vec2& r, const Vec2& s) {
 
 }  // namespace
 
+Eigen::Matrix3d symmetricAdjugate(const Eigen::Matrix3d& m) {
+  const double xx = m(0, 0), xy = m(0, 1), xz = m(0, 2), yy = m(1, 1), yz = m(1, 2), zz = m(2, 2);
+  Eigen::Matrix3d adj;
+  adj(0, 0) = yy * zz - yz * yz, adj(1, 1) = xx * zz - xz * xz, adj(2, 2) = xx * yy - xy * xy;
+  adj(0, 1) = adj(1, 0) = xz * yz - xy * zz;
+  adj(0, 2) = adj(2, 0) = xy * yz - xz * yy;
+  adj(1, 2) = adj(2, 1) = xy * xz - xx * yz;
+  return adj;
+}
+
 // The normal is the covariance's eigenvector of the smallest eigenvalue: found as the dominant eigenvector of its
 // adjugate (eigenvalues l1 l2 >= l0 l2 >= l0 l1 for l0 <= l1 <= l2) by power iteration from the face's Newell
 // normal, which converges by l0 / l1 per step (a face planar to 1e-2 of an edge: about 1e-4, two or three steps),
@@ -50,13 +60,7 @@ FacePlane leastSquaresPlane(const PolyMesh& mesh, int face) {
     cov += d * d.transpose();
     y += d.cross(mesh.vertex(ids[(i + 1) % n]) - c);
   }
-  Eigen::Matrix3d adj;
-  adj(0, 0) = cov(1, 1) * cov(2, 2) - cov(1, 2) * cov(1, 2);
-  adj(1, 1) = cov(0, 0) * cov(2, 2) - cov(0, 2) * cov(0, 2);
-  adj(2, 2) = cov(0, 0) * cov(1, 1) - cov(0, 1) * cov(0, 1);
-  adj(0, 1) = adj(1, 0) = cov(0, 2) * cov(1, 2) - cov(0, 1) * cov(2, 2);
-  adj(0, 2) = adj(2, 0) = cov(0, 1) * cov(1, 2) - cov(0, 2) * cov(1, 1);
-  adj(1, 2) = adj(2, 1) = cov(0, 1) * cov(0, 2) - cov(0, 0) * cov(1, 2);
+  const Eigen::Matrix3d adj = symmetricAdjugate(cov);
   const double scale = adj.trace();
   const double ny = y.norm();
   if (scale > 0 && std::isfinite(scale) && ny > 0 && std::isfinite(ny)) {

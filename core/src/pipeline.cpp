@@ -710,6 +710,20 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
 
 namespace {
 
+// The solver's options as the run's parameters ask for them, on `surface`.
+PlanarizeOptions planarizeOptions(const PipelineParams& params, const Surface& surface) {
+  PlanarizeOptions po;
+  po.method = params.solver;
+  po.lambda = params.lambda;
+  po.mu = params.mu;
+  po.tolerance = params.tolerance;
+  po.maxIterations = params.maxIterations;
+  po.preventFolds = params.preventFolds;
+  po.fitSurface = params.fitSurface;
+  po.surface = &surface;
+  return po;
+}
+
 // Rounds of edge flips against the faces a solve could make planar only by folding (flipFoldsAway).
 constexpr int kFoldFlipRounds = 2;
 // Not where more faces than this share fold: a coarse or noisy upload (the shared models: a fifth to a third),
@@ -725,15 +739,10 @@ constexpr double kFoldFlipShare = 0.08;
 // nodes of four. Returns the flips kept.
 int flipFoldsAway(Triangulation& t, const Surface& surface, const PipelineParams& params, const ProgressFn& progress,
                   const CancelFlag* cancel) {
-  PlanarizeOptions po;
-  po.method = PlanarizeMethod::LocalGlobal;
-  po.lambda = params.lambda;
-  po.mu = params.mu;
-  po.tolerance = params.tolerance;
-  po.maxIterations = params.maxIterations;
+  PlanarizeOptions po = planarizeOptions(params, surface);
+  po.method = PlanarizeMethod::LocalGlobal;  // folds allowed, no fit: only which faces fold is asked
   po.preventFolds = false;
   po.fitSurface = false;
-  po.surface = &surface;
   Triangulation best = t;
   std::size_t bestFolds = std::numeric_limits<std::size_t>::max();
   int flips = 0, bestFlips = 0;
@@ -1451,15 +1460,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   const Surface& surface = *r.surface;
   clock.done("triangulate");
 
-  PlanarizeOptions po;
-  po.method = params.solver;
-  po.lambda = params.lambda;
-  po.mu = params.mu;
-  po.tolerance = params.tolerance;
-  po.maxIterations = params.maxIterations;
-  po.preventFolds = params.preventFolds;
-  po.fitSurface = params.fitSurface;
-  po.surface = &surface;
+  PlanarizeOptions po = planarizeOptions(params, surface);
   // The global method's lattice has no seams, but where the solve leaves faces off planar (next to parabolic curves
   // and the lattice's defects, §7) they are cut as on seams, within the same budget: on the shared models the
   // few-faces rule left the solve stalled at 1e-2 with hundreds of faces just off planar.
@@ -1470,7 +1471,6 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     clock.done("dualize");
     return dual;
   };
-  // `dual` (of `duality`) into x.dual / x.initial, and the solve from it into x.hex / x.solve.
   auto crossing = [](const PolyMesh& m) {
     int n = 0;
     for (int f = 0; f < m.faceCount(); ++f) n += faceSelfIntersects(m, f);
@@ -1483,7 +1483,13 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // ~90 ms instead of five). Method 2's bumps at 1000 faces cut twice the faces so: the paper's methods fit
   // after every round still.
   const bool deferFit = r.method == TriangulationMethod::Global;
-  // Returns whether interior faces were cut only because a solve stalled (kStalledShare).
+  // The largest node move of x's solve from its dual, over the mean edge.
+  auto measureDisplacement = [](PipelineResult& x) {
+    const double h = x.hex.meanEdgeLength();
+    if (h > 0) x.solve.displacementMax = (x.hex.V - x.initial.V).rowwise().norm().maxCoeff() / h;
+  };
+  // `dual` (of `duality`) into x.dual / x.initial, and the solve from it into x.hex / x.solve. Returns whether
+  // interior faces were cut only because a solve stalled (kStalledShare).
   auto solveFrom = [&](PipelineResult& x, Duality duality, DualMesh dual) {
     bool stalledCuts = false;
     x.duality = duality;
@@ -1526,13 +1532,11 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
       x.solve.rounds += first.rounds;
       x.solve.initialPlanarityMax = first.initialPlanarityMax;
       x.solve.log.insert(x.solve.log.begin(), first.log.begin(), first.log.end());
-      const double h = x.hex.meanEdgeLength();
-      if (h > 0) x.solve.displacementMax = (x.hex.V - x.initial.V).rowwise().norm().maxCoeff() / h;
+      measureDisplacement(x);
     }
     if (po.fitSurface && deferFit && x.solve.converged) {
       fitPlanarMeshToSurface(x.hex, po, x.solve, progress, cancel);
-      const double h = x.hex.meanEdgeLength();
-      if (h > 0) x.solve.displacementMax = (x.hex.V - x.initial.V).rowwise().norm().maxCoeff() / h;
+      measureDisplacement(x);
     }
     clock.done("planarize");
     return stalledCuts;
@@ -1631,7 +1635,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     }
   }
 
-  if (params.clipBoundary && !surface.boundaryCurves().empty()) {
+  if (params.clipBoundary && !surface.isClosed()) {  // (closed: no boundary curve)
     report("clip", 0, "clipping the boundary panels to the boundary curve");
     r.boundaryClip = clipBoundaryPanels(r.hex, surface);
     clock.done("clip");

@@ -192,11 +192,9 @@ bool refinePlane(const PolyMesh& mesh, int face, bool warm, Vec3& n, double& d) 
     xx += e.x() * e.x(), xy += e.x() * e.y(), xz += e.x() * e.z();
     yy += e.y() * e.y(), yz += e.y() * e.z(), zz += e.z() * e.z();
   }
-  Eigen::Matrix3d adj;
-  adj(0, 0) = yy * zz - yz * yz, adj(1, 1) = xx * zz - xz * xz, adj(2, 2) = xx * yy - xy * xy;
-  adj(0, 1) = adj(1, 0) = xz * yz - xy * zz;
-  adj(0, 2) = adj(2, 0) = xy * yz - xz * yy;
-  adj(1, 2) = adj(2, 1) = xy * xz - xx * yz;
+  Eigen::Matrix3d covariance;
+  covariance << xx, xy, xz, xy, yy, yz, xz, yz, zz;
+  const Eigen::Matrix3d adj = symmetricAdjugate(covariance);
   const double scale = adj.trace();  // λ1λ2 + λ1λ3 + λ2λ3 ≥ 0, and 0 for collinear corners
   if (!(scale > 0) || !std::isfinite(scale)) return false;
   Vec3 y = n;

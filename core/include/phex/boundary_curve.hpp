@@ -23,6 +23,14 @@ class BoundaryCurve {
   const std::vector<Segment>& segments() const { return segments_; }
   // The segments that may lie within `reach` of x (those of the grid cells around x's), into `out`.
   void near(const Vec3& x, std::vector<int>& out) const;
+  // The segment among `candidates` (from near) nearest to x, its point nearest x and their distance (segment -1
+  // and the distance infinite where there is no candidate; the first of equally near ones).
+  struct Closest {
+    int segment = -1;
+    Vec3 point = Vec3::Zero();
+    double distance = std::numeric_limits<double>::infinity();
+  };
+  Closest closest(const Vec3& x, const std::vector<int>& candidates) const;
   // The point of the curve nearest to x among `candidates` (from near), and its distance; infinite where none.
   std::pair<Vec3, double> nearest(const Vec3& x, const std::vector<int>& candidates) const;
   // The point of the curve nearest to x within reach (the distance infinite where none is that near).

@@ -13,6 +13,10 @@ struct FacePlane {
   Vec3 centroid, normal;
 };
 FacePlane leastSquaresPlane(const PolyMesh& mesh, int face);
+// The adjugate of a symmetric 3x3 matrix (read from its upper triangle). For a face's covariance about its
+// centroid, with eigenvalues l0 <= l1 <= l2, its dominant eigenvector (eigenvalue l1 l2) is the normal of the
+// least-squares plane, which power iteration on it reaches by l0 / l1 a step; its trace is 0 for collinear corners.
+Eigen::Matrix3d symmetricAdjugate(const Eigen::Matrix3d& m);
 
 // Distance of the face's farthest vertex from its least-squares plane, divided by the face's mean edge length.
 double facePlanarity(const PolyMesh& mesh, int face);
