@@ -736,29 +736,40 @@ constexpr double kFoldFlipShare = 0.08;
 // vertex of three triangles, not where the quad is not convex in the tangent plane or its other diagonal is an
 // edge already), the stars repaired, and the solve run again; kept while the folds drop by a tenth or more.
 // Every node stays one of three faces (the dual of a triangulation), where a cut of a folded face makes two
-// nodes of four. Returns the flips kept.
-int flipFoldsAway(Triangulation& t, const Surface& surface, const PipelineParams& params, const ProgressFn& progress,
-                  const CancelFlag* cancel) {
+// nodes of four. Returns the flips kept and the repairs of the stars around them; `keptDual` gets the Dupin dual
+// of the triangulation kept.
+struct FoldFlips {
+  int flips = 0;
+  RepairResult repair;  // the repairs after the flips kept (moves, and edges flipped where moves did not do)
+};
+FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const PipelineParams& params, const ProgressFn& progress,
+                        const CancelFlag* cancel, std::optional<DualMesh>& keptDual) {
   PlanarizeOptions po = planarizeOptions(params, surface);
   po.method = PlanarizeMethod::LocalGlobal;  // folds allowed, no fit: only which faces fold is asked
   po.preventFolds = false;
   po.fitSurface = false;
   Triangulation best = t;
   std::size_t bestFolds = std::numeric_limits<std::size_t>::max();
-  int flips = 0, bestFlips = 0;
+  int flips = 0;
+  FoldFlips kept;
+  RepairResult repairs;  // of every round so far (those of the round kept go into `kept`)
   for (int round = 0; round <= kFoldFlipRounds; ++round) {
     checkCancel(cancel);
     if (progress)
       progress({"triangulate", 0.9 + 0.03 * round, "edge flips against folds, solve " + std::to_string(round + 1)});
-    const DualMesh dual = dupinDual(t, surface);
+    DualMesh dual = dupinDual(t, surface);
     PolyMesh hex = dual.mesh;
     planarize(hex, po, {}, cancel);
     std::vector<int> folded;
     for (int f = 0; f < hex.faceCount(); ++f)
       if (!dual.boundaryFace[f] && hex.faceSize(f) >= 4 && faceSelfIntersects(hex, f)) folded.push_back(f);
-    if (round == 0 && folded.size() > kFoldFlipShare * double(dual.mesh.faceCount())) break;
+    if (round == 0 && folded.size() > kFoldFlipShare * double(dual.mesh.faceCount())) {
+      keptDual = std::move(dual);  // of `best`, which is `t` as it came
+      break;
+    }
     if (folded.size() > 0.9 * double(bestFolds)) break;  // gained less than a tenth: the round before stands
-    best = t, bestFolds = folded.size(), bestFlips = flips;
+    best = t, bestFolds = folded.size(), kept = {flips, repairs};
+    keptDual = dual;
     if (folded.empty() || round == kFoldFlipRounds) break;
     TriMesh& T = t.mesh;
     const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
@@ -811,10 +822,14 @@ int flipFoldsAway(Triangulation& t, const Surface& surface, const PipelineParams
       --triangles[x], --triangles[y], ++triangles[c], ++triangles[d];
       ++flips;
     }
-    repairStars(t, surface);
+    // Its note is said once, with the flips' (the caller's).
+    const std::size_t notes = t.notes.size();
+    const RepairResult r = repairStars(t, surface);
+    t.notes.resize(notes);
+    repairs.moved += r.moved, repairs.flips += r.flips;
   }
   t = std::move(best);
-  return bestFlips;
+  return kept;
 }
 
 }  // namespace
@@ -887,15 +902,18 @@ std::string uploadNote(const Surface* surface) {
   return s.str();
 }
 
+// `dupinDual`, where given, gets the Dupin dual of the triangulation where the stage built it on the way (the
+// global method's fold flips solve it), so that runPipeline need not build it again.
 TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel,
-                                 SurfacePtr& made, Vec3& origin);
+                                 SurfacePtr& made, Vec3& origin, std::optional<DualMesh>* dupinDual);
 
 // triangulate in the upload's local frame (stage.origin), for runPipeline to go on in it.
-TriangulationStage triangulateLocal(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel) {
+TriangulationStage triangulateLocal(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel,
+                                    std::optional<DualMesh>* dupinDual = nullptr) {
   SurfacePtr surface;
   Vec3 origin = Vec3::Zero();
   try {
-    return triangulateOn(given, progress, cancel, surface, origin);
+    return triangulateOn(given, progress, cancel, surface, origin, dupinDual);
   } catch (const Error& e) {
     const std::string note = uploadNote(surface.get());
     if (e.code() != ErrorCode::CannotTile || note.empty()) throw Error(e.code(), inFileFrame(e.what(), origin));
@@ -914,7 +932,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
 namespace {
 
 TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel,
-                                 SurfacePtr& made, Vec3& origin) {
+                                 SurfacePtr& made, Vec3& origin, std::optional<DualMesh>* dupinDual) {
   validate(given);
   PipelineParams params = given;
   params.method = resolveMethod(given);
@@ -1214,10 +1232,16 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     }
   }
   if (params.method == TriangulationMethod::Global && !checked && params.foldFlips) {
-    if (const int flips = flipFoldsAway(t.triangulation, *t.surface, params, progress, cancel); flips > 0)
-      t.triangulation.notes.push_back(std::to_string(flips) +
-                                      " edges flipped where the dual, solved with folds allowed, had faces crossing "
-                                      "themselves (each such face would otherwise be cut, making two nodes of four faces)");
+    std::optional<DualMesh> dual;
+    if (const FoldFlips f = flipFoldsAway(t.triangulation, *t.surface, params, progress, cancel, dual); f.flips > 0) {
+      std::string note = std::to_string(f.flips) +
+                         " edges flipped where the dual, solved with folds allowed, had faces crossing themselves (each "
+                         "such face would otherwise be cut, making two nodes of four faces); the stars around them "
+                         "repaired by moving " + std::to_string(f.repair.moved) + " vertices within the surface";
+      if (f.repair.flips > 0) note += " and flipping " + std::to_string(f.repair.flips) + " edges more";
+      t.triangulation.notes.push_back(note);
+    }
+    if (dupinDual) *dupinDual = std::move(dual);
   }
   t.check = checked ? std::move(*checked) : checkTriangulation(t.triangulation, *t.surface);
   // A lay that covers next to nothing is no result to hand on (a hill laid from a tiny loop around its top:
@@ -1449,7 +1473,8 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   };
 
   report("triangulate", 0, "laying the triangulation");
-  TriangulationStage stage = triangulateLocal(params, progress, cancel);
+  std::optional<DualMesh> stageDual;  // the Dupin dual, where the triangulation stage built it
+  TriangulationStage stage = triangulateLocal(params, progress, cancel, &stageDual);
   r.method = stage.method;
   r.field = stage.field;
   r.surface = std::move(stage.surface);
@@ -1467,7 +1492,9 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   const bool seams = r.triangulation.systems > 1 || r.method == TriangulationMethod::Global;
   auto dualOf = [&](Duality duality) {
     report("dualize", 0, std::string(dualityName(duality)) + " duality");
-    DualMesh dual = duality == Duality::Dupin ? dupinDual(r.triangulation, surface) : tangentDual(r.triangulation, surface);
+    DualMesh dual = duality == Duality::Tangent ? tangentDual(r.triangulation, surface)
+                    : stageDual                   ? *stageDual
+                                                  : dupinDual(r.triangulation, surface);
     clock.done("dualize");
     return dual;
   };

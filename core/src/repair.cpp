@@ -439,7 +439,7 @@ int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo) 
     }
     return !incident[v].empty();
   };
-  auto failing = [&](int v) {
+  auto judge = [&](int v) {
     if (!judgeable[v] || !closed(v)) return 0;
     const LocalGeometry& g = geo[v];
     int bad = 0;
@@ -464,8 +464,15 @@ int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo) 
       list.erase(std::find(list.begin(), list.end(), f));
     }
   };
+  // Each vertex's count as last judged (-1: to judge): it changes only where the vertex's own triangles do (a
+  // flip's four corners), so every sweep after the first judges those alone.
+  std::vector<int> judged(nv, -1);
+  auto failing = [&](int v) {
+    if (judged[v] < 0) judged[v] = judge(v);
+    return judged[v];
+  };
   auto attach = [&](int f) {
-    for (int k = 0; k < 3; ++k) incident[T.F(f, k)].push_back(f);
+    for (int k = 0; k < 3; ++k) incident[T.F(f, k)].push_back(f), judged[T.F(f, k)] = -1;
   };
   int flipped = 0;
   for (int sweep = 0; sweep < 4; ++sweep) {

@@ -99,7 +99,8 @@ class Extractor {
     }
     notes_.insert(notes_.begin(), "global triangulation: " + std::to_string(out.mesh.V.rows()) + " vertices (" +
                                       std::to_string(boundarySiteCount()) + " on the boundary), " +
-                                      std::to_string(repairs) + " lattice points added or removed to connect the regions");
+                                      std::to_string(repairs) + (repairs == 1 ? " lattice point" : " lattice points") +
+                                      " added or removed to connect the regions");
     out.notes = notes_;
     return out;
   }
