@@ -210,16 +210,21 @@ void buildTopology(FieldMesh& m) {
     m.start[v + 1] = static_cast<int>(m.adjacent.size());
   }
   // Boundary: half-edges a -> b with no b -> a. Their next one starts at b (one per boundary vertex: manifold).
-  std::unordered_map<std::uint64_t, int> directed;
-  directed.reserve(3 * static_cast<std::size_t>(nf));
-  auto key = [nv](int a, int b) { return std::uint64_t(a) * std::uint64_t(nv) + std::uint64_t(b); };
+  // The half-edges by their start, each row sorted (a hash map of them took 4 % of a run at 10k faces).
+  std::vector<int> outStart(nv + 1, 0), out(3 * static_cast<std::size_t>(nf));
   for (int f = 0; f < nf; ++f)
-    for (int c = 0; c < 3; ++c) directed[key(m.F(f, c), m.F(f, (c + 1) % 3))] = f;
+    for (int c = 0; c < 3; ++c) ++outStart[m.F(f, c) + 1];
+  for (int v = 0; v < nv; ++v) outStart[v + 1] += outStart[v];
+  fill.assign(outStart.begin(), outStart.end() - 1);
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) out[fill[m.F(f, c)]++] = m.F(f, (c + 1) % 3);
+  for (int v = 0; v < nv; ++v) std::sort(out.begin() + outStart[v], out.begin() + outStart[v + 1]);
+  auto halfEdge = [&](int a, int b) { return std::binary_search(out.begin() + outStart[a], out.begin() + outStart[a + 1], b); };
   std::vector<int> next(nv, -1);
   for (int f = 0; f < nf; ++f)
     for (int c = 0; c < 3; ++c) {
       const int a = m.F(f, c), b = m.F(f, (c + 1) % 3);
-      if (!directed.count(key(b, a))) next[a] = b;
+      if (!halfEdge(b, a)) next[a] = b;
     }
   m.boundary.assign(nv, 0);
   m.loops.clear();
