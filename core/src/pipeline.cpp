@@ -769,8 +769,9 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     }
     if (folded.size() > 0.9 * double(bestFolds)) break;  // gained less than a tenth: the round before stands
     best = t, bestFolds = folded.size(), kept = {flips, repairs};
-    keptDual = dual;
+    keptDual = std::move(dual);
     if (folded.empty() || round == kFoldFlipRounds) break;
+    const DualMesh& d = *keptDual;
     TriMesh& T = t.mesh;
     const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
     auto key = [nv](int a, int b) { return std::uint64_t(std::min(a, b)) * std::uint64_t(nv) + std::uint64_t(std::max(a, b)); };
@@ -781,12 +782,12 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     auto centroid = [&](int f) { return Vec3((T.V.row(T.F(f, 0)) + T.V.row(T.F(f, 1)) + T.V.row(T.F(f, 2))).transpose() / 3); };
     std::vector<char> used(nf, 0);
     for (int f : folded) {
-      const int v = dual.faceVertex[f], n = hex.faceSize(f);
+      const int v = d.faceVertex[f], n = hex.faceSize(f);
       const int* ids = hex.face(f);
       double worst = 0;
       int w = -1;
       for (int i = 0; i < n; ++i) {
-        const int Ti = dual.vertexTriangle[ids[i]], Tj = dual.vertexTriangle[ids[(i + 1) % n]];
+        const int Ti = d.vertexTriangle[ids[i]], Tj = d.vertexTriangle[ids[(i + 1) % n]];
         if (Ti < 0 || Tj < 0) continue;
         int shared = -1;  // the triangles' common vertex other than v
         for (int a = 0; a < 3; ++a)
@@ -1492,8 +1493,11 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   const bool seams = r.triangulation.systems > 1 || r.method == TriangulationMethod::Global;
   auto dualOf = [&](Duality duality) {
     report("dualize", 0, std::string(dualityName(duality)) + " duality");
+    // The stage's Dupin dual serves once (a second Dupin solve, rare, builds it again rather than keep it).
+    std::optional<DualMesh> taken;
+    if (duality == Duality::Dupin) taken.swap(stageDual);
     DualMesh dual = duality == Duality::Tangent ? tangentDual(r.triangulation, surface)
-                    : stageDual                   ? *stageDual
+                    : taken                       ? std::move(*taken)
                                                   : dupinDual(r.triangulation, surface);
     clock.done("dualize");
     return dual;
