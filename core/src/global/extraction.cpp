@@ -322,20 +322,28 @@ class Extractor {
     for (int s = 0; s < ns; ++s) {
       const auto& e = link[s];
       if (e.empty()) continue;  // a region with no triangle: dropped with the unused sites
-      std::map<int, int> next, previous;
+      // The link's edges a -> b (a handful: searched in place rather than mapped).
+      auto from = [&](int a) {  // the edge out of a, or null
+        for (const auto& edge : e)
+          if (edge.first == a) return &edge;
+        return static_cast<const std::pair<int, int>*>(nullptr);
+      };
+      auto into = [&](int b) {
+        for (const auto& edge : e)
+          if (edge.second == b) return true;
+        return false;
+      };
       bool ok = true;
-      for (const auto& [a, b] : e) {
-        ok = ok && !next.count(a) && !previous.count(b);
-        next[a] = b, previous[b] = a;
-      }
+      for (std::size_t i = 0; i < e.size() && ok; ++i)  // no two edges out of one vertex, nor into one
+        for (std::size_t j = 0; j < i && ok; ++j) ok = e[j].first != e[i].first && e[j].second != e[i].second;
       if (ok) {
         // One path (a region on the boundary) or one cycle through all the link's edges.
         int first = e.front().first, starts = 0;
         for (const auto& [a, b] : e)
-          if (!previous.count(a)) first = a, ++starts;
+          if (!into(a)) first = a, ++starts;
         int steps = 0, v = first;
-        while (steps <= static_cast<int>(e.size()) && next.count(v)) {
-          v = next[v], ++steps;
+        while (steps <= static_cast<int>(e.size()) && from(v)) {
+          v = from(v)->second, ++steps;
           if (v == first) break;
         }
         ok = steps == static_cast<int>(e.size()) && (touches[s] ? starts == 1 : starts == 0 && v == first);

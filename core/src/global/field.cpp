@@ -114,23 +114,38 @@ Level coarsen(const Level& fine) {
   coarse.scale.assign(m, 0.0);
   coarse.target.assign(m, Vec3::Zero());
   coarse.fixed.assign(m, 0);
-  std::vector<std::vector<int>> children(m);
-  for (int i = 0; i < n; ++i) children[parent[i]].push_back(i);
+  // Each coarse vertex's children (one or two), in order, as compressed rows.
+  std::vector<int> childStart(m + 1, 0), childList(n);
+  for (int i = 0; i < n; ++i) ++childStart[parent[i] + 1];
+  for (int c = 0; c < m; ++c) childStart[c + 1] += childStart[c];
+  {
+    std::vector<int> fill(childStart.begin(), childStart.end() - 1);
+    for (int i = 0; i < n; ++i) childList[fill[parent[i]]++] = i;
+  }
+  auto children = [&](int c) {
+    struct Range {
+      const int *b, *e;
+      const int* begin() const { return b; }
+      const int* end() const { return e; }
+    };
+    return Range{childList.data() + childStart[c], childList.data() + childStart[c + 1]};
+  };
+  std::vector<const Frame*> frames;
+  std::vector<double> weights;
   for (int c = 0; c < m; ++c) {
-    std::vector<const Frame*> frames;
-    std::vector<double> weights;
+    frames.clear(), weights.clear();
     double area = 0;
     Vec3 x = Vec3::Zero();
-    for (int i : children[c]) {
+    for (int i : children(c)) {
       frames.push_back(&fine.frame[i]);
       weights.push_back(fine.area[i]);
       area += fine.area[i];
       x += fine.area[i] * fine.x[i];
     }
     coarse.area[c] = area;
-    coarse.x[c] = area > 0 ? Vec3(x / area) : fine.x[children[c][0]];
+    coarse.x[c] = area > 0 ? Vec3(x / area) : fine.x[*children(c).begin()];
     coarse.frame[c] = averageFrame(frames, weights);
-    for (int i : children[c]) {
+    for (int i : children(c)) {
       coarse.alignWeight[c] += fine.area[i] * fine.alignWeight[i] / std::max(area, 1e-300);
       coarse.scale[c] += fine.area[i] * fine.scale[i] / std::max(area, 1e-300);
       if (fine.fixed[i] && !coarse.fixed[c]) coarse.fixed[c] = 1, coarse.target[c] = fine.target[i];
@@ -139,18 +154,17 @@ Level coarsen(const Level& fine) {
     coarse.target[c] = normalized(tangential(coarse.target[c], coarse.frame[c].n));
     if (!(norm(coarse.target[c]) > 0.5)) coarse.target[c] = coarse.frame[c].t, coarse.fixed[c] = 0;
   }
-  // Adjacency: the children's, mapped.
-  std::vector<std::vector<int>> rows(m);
-  for (int i = 0; i < n; ++i)
-    for (int k = fine.start[i]; k < fine.start[i + 1]; ++k) {
-      const int a = parent[i], b = parent[fine.adjacent[k]];
-      if (a != b) rows[a].push_back(b);
-    }
+  // Adjacency: the children's, mapped (each coarse vertex's row gathered from its children's, sorted, unique).
   coarse.start.assign(m + 1, 0);
+  std::vector<int> row;
   for (int c = 0; c < m; ++c) {
-    std::sort(rows[c].begin(), rows[c].end());
-    rows[c].erase(std::unique(rows[c].begin(), rows[c].end()), rows[c].end());
-    coarse.adjacent.insert(coarse.adjacent.end(), rows[c].begin(), rows[c].end());
+    row.clear();
+    for (int i : children(c))
+      for (int k = fine.start[i]; k < fine.start[i + 1]; ++k)
+        if (const int b = parent[fine.adjacent[k]]; b != c) row.push_back(b);
+    std::sort(row.begin(), row.end());
+    row.erase(std::unique(row.begin(), row.end()), row.end());
+    coarse.adjacent.insert(coarse.adjacent.end(), row.begin(), row.end());
     coarse.start[c + 1] = static_cast<int>(coarse.adjacent.size());
   }
   colour(coarse);
