@@ -2,7 +2,6 @@
 // same hierarchy as the directions.
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "global.hpp"
 #include "phex/parallel.hpp"
@@ -38,13 +37,18 @@ Vec3 nearestPoint(const Lattice& lat, const Vec3& o, const Vec3& p) {
   const double du = dot(lat.U, d), dv = dot(lat.V, d);
   const double a = lat.i00 * du + lat.i01 * dv, b = lat.i01 * du + lat.i11 * dv;
   const double a0 = std::floor(a), b0 = std::floor(b);
-  double best = std::numeric_limits<double>::infinity(), ba = a0, bb = b0;
-  for (int i = 0; i < 4; ++i) {
-    const double ca = a0 + (i & 1), cb = b0 + (i >> 1);
+  auto cost = [&](double ca, double cb) {
     const double ea = a - ca, eb = b - cb;
-    const double cost = ea * ea + ea * eb + eb * eb;
-    if (cost < best) best = cost, ba = ca, bb = cb;
-  }
+    return ea * ea + ea * eb + eb * eb;
+  };
+  // The first of the least (corners in the order (a0, b0), (a0 + 1, b0), (a0, b0 + 1), (a0 + 1, b0 + 1)), chosen
+  // by selects rather than branches: which corner wins is a coin toss for the branch predictor.
+  const double a1 = a0 + 1, b1 = b0 + 1;
+  const double c0 = cost(a0, b0), c1 = cost(a1, b0), c2 = cost(a0, b1), c3 = cost(a1, b1);
+  const bool first = !(c1 < c0), third = !(c3 < c2);
+  const double m01 = first ? c0 : c1, m23 = third ? c2 : c3;
+  const bool low = !(m23 < m01);
+  const double ba = low ? (first ? a0 : a1) : (third ? a0 : a1), bb = low ? b0 : b1;
   return o + ba * lat.U + bb * lat.V;
 }
 
