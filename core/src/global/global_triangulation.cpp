@@ -144,8 +144,12 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       fitToField(t.mesh, best.seeds, surface, m, fields[0], scale, bestCell, kFitRounds, cancel);
       // The field's singular points, from the field mesh; the field's directions at the vertices, for display.
       int plus = 0, minus = 0;
+      std::vector<int> indices(m.F.rows());  // per field-mesh triangle, over threads; gathered in order below
+      parallelRanges(static_cast<int>(m.F.rows()), kSweepGrain, [&](int begin, int end) {
+        for (int f = begin; f < end; ++f) indices[f] = singularityIndex(m, fields[0], m.F(f, 0), m.F(f, 1), m.F(f, 2));
+      });
       for (int f = 0; f < m.F.rows(); ++f) {
-        const int index = singularityIndex(m, fields[0], m.F(f, 0), m.F(f, 1), m.F(f, 2));
+        const int index = indices[f];
         if (index == 0) continue;
         t.singularities.push_back({(m.point(m.F(f, 0)) + m.point(m.F(f, 1)) + m.point(m.F(f, 2))) / 3, index});
         (index > 0 ? plus : minus) += std::abs(index);
