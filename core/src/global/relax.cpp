@@ -4,8 +4,6 @@
 // vectors the edges stand for, the rows follow the field's lines again.
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <unordered_map>
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
@@ -97,18 +95,25 @@ namespace phex::global {
 int improveValences(TriMesh& T, const Surface& surface, const CancelFlag* cancel) {
   const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
   if (nf == 0) return 0;
-  // Half-edge twins: the triangle and corner across each edge (corner c: edge from F(f, c) to F(f, c + 1)).
-  auto key = [nv](int a, int b) { return std::uint64_t(a) * std::uint64_t(nv) + std::uint64_t(b); };
-  std::unordered_map<std::uint64_t, int> halfEdge;  // a -> b  to 3 f + c
-  halfEdge.reserve(3 * static_cast<std::size_t>(nf));
+  // Each vertex's triangles, kept as the flips change them (a hash map of every half-edge took a quarter of this
+  // at 100k faces). The triangulation is a manifold here (the extraction made it one): a half-edge a -> b is in
+  // one triangle at most, found among a's.
+  std::vector<std::vector<int>> around(nv);
   for (int f = 0; f < nf; ++f)
-    for (int c = 0; c < 3; ++c) halfEdge[key(T.F(f, c), T.F(f, (c + 1) % 3))] = 3 * f + c;
+    for (int c = 0; c < 3; ++c) around[T.F(f, c)].push_back(f);
+  // The half-edge a -> b as 3 f + c (corner c: F(f, c) = a, F(f, c + 1) = b), or -1.
+  auto halfEdge = [&](int a, int b) {
+    for (int f : around[a])
+      for (int c = 0; c < 3; ++c)
+        if (T.F(f, c) == a && T.F(f, (c + 1) % 3) == b) return 3 * f + c;
+    return -1;
+  };
   std::vector<int> valence(nv, 0);
   std::vector<char> boundary(nv, 0);
   for (int f = 0; f < nf; ++f)
     for (int c = 0; c < 3; ++c) {
       const int a = T.F(f, c), b = T.F(f, (c + 1) % 3);
-      if (!halfEdge.count(key(b, a))) boundary[a] = boundary[b] = 1, ++valence[a], ++valence[b];
+      if (halfEdge(b, a) < 0) boundary[a] = boundary[b] = 1, ++valence[a], ++valence[b];
       else if (a < b) ++valence[a], ++valence[b];
     }
   // A boundary vertex's ideal valence is 4 (half a hexagon's star), an interior one's 6.
@@ -116,6 +121,7 @@ int improveValences(TriMesh& T, const Surface& surface, const CancelFlag* cancel
     const int d = valence[v] + change - (boundary[v] ? 4 : 6);
     return d * d;
   };
+  auto leave = [&](int v, int f) { around[v].erase(std::find(around[v].begin(), around[v].end(), f)); };
   int flips = 0;
   for (int pass = 0; pass < 8; ++pass) {
     checkCancel(cancel);
@@ -124,11 +130,11 @@ int improveValences(TriMesh& T, const Surface& surface, const CancelFlag* cancel
       for (int c = 0; c < 3; ++c) {
         const int a = T.F(f, c), b = T.F(f, (c + 1) % 3), p = T.F(f, (c + 2) % 3);
         if (a > b) continue;
-        const auto it = halfEdge.find(key(b, a));
-        if (it == halfEdge.end()) continue;
-        const int g = it->second / 3, gc = it->second % 3;
+        const int twin = halfEdge(b, a);
+        if (twin < 0) continue;
+        const int g = twin / 3, gc = twin % 3;
         const int q = T.F(g, (gc + 2) % 3);
-        if (p == q || valence[a] <= 3 || valence[b] <= 3 || halfEdge.count(key(p, q)) || halfEdge.count(key(q, p))) continue;
+        if (p == q || valence[a] <= 3 || valence[b] <= 3 || halfEdge(p, q) >= 0 || halfEdge(q, p) >= 0) continue;
         const int before = excess(a, 0) + excess(b, 0) + excess(p, 0) + excess(q, 0);
         const int after = excess(a, -1) + excess(b, -1) + excess(p, 1) + excess(q, 1);
         if (after >= before) continue;
@@ -140,17 +146,10 @@ int improveValences(TriMesh& T, const Surface& surface, const CancelFlag* cancel
         const double t1 = dot(cross(A - P, Q - P), n), t2 = dot(cross(Q - P, B - P), n);
         const double scale = (Q - P).squaredNorm() + (A - B).squaredNorm();
         if (!(t1 > 0.1 * scale * 0.5) || !(t2 > 0.1 * scale * 0.5)) continue;
-        // Flip: triangle f becomes (p, a, q), triangle g becomes (q, b, p).
-        for (int k = 0; k < 3; ++k) {
-          halfEdge.erase(key(T.F(f, k), T.F(f, (k + 1) % 3)));
-          halfEdge.erase(key(T.F(g, k), T.F(g, (k + 1) % 3)));
-        }
+        // Flip: triangle f becomes (p, a, q), triangle g becomes (q, b, p); a leaves g, b leaves f, p joins g, q f.
         T.F.row(f) << p, a, q;
         T.F.row(g) << q, b, p;
-        for (int k = 0; k < 3; ++k) {
-          halfEdge[key(T.F(f, k), T.F(f, (k + 1) % 3))] = 3 * f + k;
-          halfEdge[key(T.F(g, k), T.F(g, (k + 1) % 3))] = 3 * g + k;
-        }
+        leave(a, g), leave(b, f), around[p].push_back(g), around[q].push_back(f);
         --valence[a], --valence[b], ++valence[p], ++valence[q];
         ++flipped;
       }
