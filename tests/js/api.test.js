@@ -47,6 +47,22 @@ test('the default torus is a planar, valid, hexagon mesh', () => {
   assert.equal('ok' in torus, false);
 });
 
+// The core is built with WebAssembly exception handling: an engine without it gets an error saying so, before
+// any module is loaded (simulated here by a validator that refuses the probe), and never a compile error.
+test('an engine without WebAssembly exception handling is refused with code unsupported', async () => {
+  assert.ok(WebAssembly.validate(new Uint8Array([0, 97, 115, 109, 1, 0, 0, 0])), 'an empty module validates');
+  const validate = WebAssembly.validate;
+  WebAssembly.validate = (bytes) => !new Uint8Array(bytes).includes(6) && validate(bytes);  // no `try` (0x06)
+  try {
+    await assert.rejects(createPHex(), (e) => e instanceof PHexError && e.code === 'unsupported' && /exception handling/.test(e.message));
+  } finally {
+    WebAssembly.validate = validate;
+  }
+  const again = await createPHex();  // the real engine has them
+  assert.ok((await again.run({ surface: 'torus', faces: 200 })).metrics.faceCount > 0);
+  again.dispose();
+});
+
 test('progress is reported stage by stage', () => {
   const stages = [...new Set(progress.map((p) => p.stage))];
   for (const stage of ['triangulate', 'dualize', 'planarize', 'measure']) assert.ok(stages.includes(stage), stage);

@@ -731,7 +731,11 @@ export interface CreateOptions {
   worker?: boolean;
 }
 
-/** Loads the wasm core (next to this file) and resolves when it is ready. Rejects with code 'io' if it cannot be loaded. */
+/**
+ * Loads the wasm core (next to this file) and resolves when it is ready. Rejects with code 'io' if it cannot be
+ * loaded, and with code 'unsupported' where the engine lacks WebAssembly exception handling (before Chrome and
+ * Edge 95, Firefox 100, Safari 15.2, node 17).
+ */
 export function createPHex(options?: CreateOptions): Promise<PHex>;
 
 /** A polygon mesh split into triangles for rendering. */
