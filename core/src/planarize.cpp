@@ -311,8 +311,10 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
   // Whether face f, projected onto its current plane, is a simple polygon.
   auto faceIsSimple = [&](int f) { return faceScale[f] == 0 || !faceSelfIntersects(mesh, f, normal[f]); };
   long foldsPrevented = 0;
-  // The vertex step: every vertex moved to the minimizer of its own terms for the current planes.
-  auto moveVertex = [&](int v, double lambda) {
+  // The vertex step: every vertex moved to the minimizer of its own terms for the current planes. Its
+  // displacement depends on the planes and the vertex alone (over threads, below); the guard against folds then
+  // looks at the faces as the vertices before it left them, so steps are taken one vertex after another.
+  auto displacement = [&](int v, double lambda) -> Vec3 {
     const double wl = lambda / (h * h), wm = options.mu / (h * h);
     // The right-hand side is the gradient at the current position, summed from per-face residuals
     // d_f − n_f·x_v: their round-off (relative to |x_v|, not to h) then only shifts the planes, which
@@ -345,7 +347,11 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
     // A sweep never moves a vertex by more than an edge length: near-degenerate faces (an invalid
     // triangulation's) have ill-defined planes whose intersections can lie anywhere.
     if (dx.norm() > h) dx *= h / dx.norm();
-    // Nor does it turn a simple face into a self-intersecting one: where a vertex's planes are nearly
+    return dx;
+  };
+  auto takeStep = [&](int v, Vec3 dx) {
+    const Vec3 xv = mesh.vertex(v);
+    // A step never turns a simple face into a self-intersecting one: where a vertex's planes are nearly
     // dependent (next to a parabolic curve) their intersection runs off along the free direction and
     // drags the vertex across its face. The step is then shortened (halved up to four times, else not
     // taken); a shortened step of a convex quadratic still lowers the energy.
@@ -377,8 +383,13 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
     }
     mesh.V.row(v) = (xv + dx).transpose();
   };
+  auto moveVertex = [&](int v, double lambda) { takeStep(v, displacement(v, lambda)); };
+  std::vector<Vec3> steps(nv);
   auto vertexStep = [&](double lambda) {
-    for (int v = 0; v < nv; ++v) moveVertex(v, lambda);
+    parallelRanges(nv, kFacesPerThread, [&](int begin, int end) {
+      for (int v = begin; v < end; ++v) steps[v] = displacement(v, lambda);
+    });
+    for (int v = 0; v < nv; ++v) takeStep(v, steps[v]);
   };
   // Once λ is gone, a handful of faces can lag behind the rest, each sweep taking off only a fixed
   // fraction of their error (on a 100k-face free-form mesh: two adjacent hexagons at 0.66 per sweep, 28
