@@ -876,6 +876,26 @@ constexpr int kCreaseEdges = 3;
 
 // What a noisy uploaded mesh (MeshSurface::noise), or one with a crease, does to the method, said in the notes
 // and in the errors of a lay that fails on it; empty for any other surface.
+// A lay of rows leaving a point of the upload this many mean triangle edges from any triangle has left it bare
+// (triangulateOn).
+constexpr double kBareGap = 2.0;
+
+// The largest distance from the points of an uploaded surface (at most about 10000 of its vertices) to the
+// triangles of `t`, over their mean edge, and the point farthest off: where a lay left part of the upload bare.
+double bareGap(const Triangulation& t, const MeshSurface& mesh, Vec3* where) {
+  PolyMesh tri;
+  tri.V = t.mesh.V;
+  for (int f = 0; f < t.mesh.F.rows(); ++f) tri.addFace({t.mesh.F(f, 0), t.mesh.F(f, 1), t.mesh.F(f, 2)});
+  std::vector<Vec3> points;
+  const int n = mesh.vertexCount(), stride = std::max(1, n / 10000);
+  for (int v = 0; v < n; v += stride) points.push_back(mesh.mesh().V.row(v).transpose());
+  const double edge = t.mesh.meanEdgeLength();
+  int farthest = -1;
+  const double gap = edge > 0 ? largestGapToMesh(tri, points, &farthest) / edge : 0.0;
+  if (where && farthest >= 0) *where = points[static_cast<std::size_t>(farthest)];
+  return gap;
+}
+
 std::string uploadNote(const Surface* surface) {
   const auto* mesh = dynamic_cast<const MeshSurface*>(surface);
   if (!mesh) return "";
@@ -1144,18 +1164,21 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       // rows covers the upload (a wave roof, a cylinder, a plane, an ellipsoid) Method 2 stays: 100 % hexagons.
       const bool global = given.method == TriangulationMethod::Auto && params.mesh &&
                           (unlaid || choice.systems > 1 || choice.quality < kPoorTrial);
-      if (global) {
+      auto layGlobal = [&](const std::string& why) {
         params.method = t.method = TriangulationMethod::Global;
         t.field.clear();
         t.triangulation = globalTriangulation(*t.surface, globalOptions(params, params.cell > 0 ? params.cell : 0), progress, cancel);
         repairStars(t.triangulation, *t.surface);
+        surfaceNote += (surfaceNote.empty() ? "" : "; ") + why;
+      };
+      if (global) {
         std::ostringstream s;
         if (unlaid)
           s << "no family of rows could be laid on the upload (§5.2), so it was tiled by the global method";
         else
           s << "the trial lays took " << choice.systems << " systems of rows (no singularity-free conjugate network covers the "
                "upload, §7), so it was tiled by the global method, with singular vertices instead of seams";
-        surfaceNote += (surfaceNote.empty() ? "" : "; ") + s.str();
+        layGlobal(s.str());
       } else {
       const std::string& startNote = choice.note;
       const double trialCell = choice.trialCell, trialVertices = choice.trialVertices;
@@ -1229,6 +1252,26 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       }
       if (!repaired) repairLaidTriangulation(t.triangulation, *t.surface, lo.repairSweeps, cancel);
       if (!startNote.empty()) t.triangulation.notes.insert(t.triangulation.notes.begin(), startNote);
+      // Under auto, a lay of one system of rows that left part of the upload bare (rows stopping short of the
+      // boundary or of each other) gives way to the global method, which covers the whole surface: uploaded
+      // samples of the ellipsoid band and the elliptic paraboloid at 1000 / 10000 faces left holes 6.5 / 19.7
+      // and 6.9 / 12.0 mean panel edges wide (the global method: 0.13 / 0.03 and 0.16 / 0.04, none or 5 faces
+      // cut), the uploaded wave roof at 30k and 100k faces a strip (23 edges at 100k). Lays that end about an
+      // edge short of the boundary (1-1.55 mean triangle edges: the cylinder, sphere, vase, hyperboloid, the
+      // wave roof up to 10k faces) keep Method 2's all-hexagon rows.
+      if (given.method == TriangulationMethod::Auto && params.mesh)
+        if (const auto* m = dynamic_cast<const MeshSurface*>(t.surface.get())) {
+          Vec3 at = Vec3::Zero();
+          const double gap = bareGap(t.triangulation, *m, &at);
+          if (gap > kBareGap) {
+            std::ostringstream s;
+            s.precision(3);
+            s << "Method 2's rows left the upload near (" << at.x() << ", " << at.y() << ", " << at.z() << ") " << gap
+              << " mean triangle edges from any triangle (they stopped short there), so it was tiled by the global "
+                 "method, which covers it";
+            layGlobal(s.str());
+          }
+        }
       }
     }
   }

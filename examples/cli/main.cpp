@@ -45,7 +45,8 @@ Options of `phex run`:
   --param NAME=VALUE        a surface parameter, e.g. --param R=2 (repeatable)
   --method NAME             triangulation: auto (default: the surface's recommended method, see
                             `phex surfaces`; for an uploaded mesh prespecified where trial lays find
-                            one system of rows covering it, else global; §7's geodesic route for a
+                            one system of rows covering it and its lay leaves no part bare, else
+                            global; §7's geodesic route for a
                             closed convex one, subdivision for a closed convex polyhedron of
                             fewer vertices than the faces asked for), progressive (§5.2 Method 1), prespecified
                             (Method 2, along --field), subdivision (§7, closed convex surfaces) or

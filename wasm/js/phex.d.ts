@@ -362,7 +362,7 @@ export interface RunParams {
   foldFlips?: 'on' | 'off';
   /**
    * Triangulation method: 'auto' (default: the surface's recommended method, `SurfaceSpec.method`;
-   * for an uploaded mesh 'prespecified' where trial lays find one system of rows covering it, else 'global'; §7's geodesic route for a closed convex one, 'subdivision' for a closed convex polyhedron of fewer vertices than the faces asked for), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
+   * for an uploaded mesh 'prespecified' where trial lays find one system of rows covering it and its lay leaves no part bare, else 'global'; §7's geodesic route for a closed convex one, 'subdivision' for a closed convex polyhedron of fewer vertices than the faces asked for), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
    * conjugation along `field` (Method 2), 'subdivision' (Loop subdivision of a convex control mesh, §7:
    * `surface` names a built-in control or `mesh` is the control), 'lattice' (parameter rows), 'global' (any
    * surface, uploaded or analytic, of any genus and boundary: a 6-fold direction field in the Dupin metric, a
