@@ -874,21 +874,30 @@ namespace {
 // Creases of fewer edges than this (a stray pair of flipped slivers) go unmentioned.
 constexpr int kCreaseEdges = 3;
 
-// What a noisy uploaded mesh (MeshSurface::noise), or one with a crease, does to the method, said in the notes
-// and in the errors of a lay that fails on it; empty for any other surface.
+// The points the coverage is measured at: an upload's vertices (about 10000 of them at most), else 2000 samples
+// of the analytic surface.
+std::vector<Vec3> coverageSamples(const Surface& surface) {
+  std::vector<Vec3> points;
+  if (const auto* mesh = dynamic_cast<const MeshSurface*>(&surface)) {
+    const int n = mesh->vertexCount(), stride = std::max(1, n / 10000);
+    for (int v = 0; v < n; v += stride) points.push_back(mesh->mesh().V.row(v).transpose());
+  } else {
+    for (const LocalGeometry& g : surface.samples(2000)) points.push_back(g.point);
+  }
+  return points;
+}
+
 // A lay of rows leaving a point of the upload this many mean triangle edges from any triangle has left it bare
 // (triangulateOn).
 constexpr double kBareGap = 2.0;
 
-// The largest distance from the points of an uploaded surface (at most about 10000 of its vertices) to the
-// triangles of `t`, over their mean edge, and the point farthest off: where a lay left part of the upload bare.
-double bareGap(const Triangulation& t, const MeshSurface& mesh, Vec3* where) {
+// The largest distance from the coverage samples of `surface` to the triangles of `t`, over their mean edge, and
+// the sample farthest off: where a lay left part of the surface bare.
+double bareGap(const Triangulation& t, const Surface& surface, Vec3* where) {
   PolyMesh tri;
   tri.V = t.mesh.V;
   for (int f = 0; f < t.mesh.F.rows(); ++f) tri.addFace({t.mesh.F(f, 0), t.mesh.F(f, 1), t.mesh.F(f, 2)});
-  std::vector<Vec3> points;
-  const int n = mesh.vertexCount(), stride = std::max(1, n / 10000);
-  for (int v = 0; v < n; v += stride) points.push_back(mesh.mesh().V.row(v).transpose());
+  const std::vector<Vec3> points = coverageSamples(surface);
   const double edge = t.mesh.meanEdgeLength();
   int farthest = -1;
   const double gap = edge > 0 ? largestGapToMesh(tri, points, &farthest) / edge : 0.0;
@@ -896,6 +905,8 @@ double bareGap(const Triangulation& t, const MeshSurface& mesh, Vec3* where) {
   return gap;
 }
 
+// What a noisy uploaded mesh (MeshSurface::noise), or one with a crease, does to the method, said in the notes
+// and in the errors of a lay that fails on it; empty for any other surface.
 std::string uploadNote(const Surface* surface) {
   const auto* mesh = dynamic_cast<const MeshSurface*>(surface);
   if (!mesh) return "";
@@ -1259,19 +1270,18 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       // cut), the uploaded wave roof at 30k and 100k faces a strip (23 edges at 100k). Lays that end about an
       // edge short of the boundary (1-1.55 mean triangle edges: the cylinder, sphere, vase, hyperboloid, the
       // wave roof up to 10k faces) keep Method 2's all-hexagon rows.
-      if (given.method == TriangulationMethod::Auto && params.mesh)
-        if (const auto* m = dynamic_cast<const MeshSurface*>(t.surface.get())) {
-          Vec3 at = Vec3::Zero();
-          const double gap = bareGap(t.triangulation, *m, &at);
-          if (gap > kBareGap) {
-            std::ostringstream s;
-            s.precision(3);
-            s << "Method 2's rows left the upload near (" << at.x() << ", " << at.y() << ", " << at.z() << ") " << gap
-              << " mean triangle edges from any triangle (they stopped short there), so it was tiled by the global "
-                 "method, which covers it";
-            layGlobal(s.str());
-          }
+      if (given.method == TriangulationMethod::Auto && params.mesh) {
+        Vec3 at = Vec3::Zero();
+        const double gap = bareGap(t.triangulation, *t.surface, &at);
+        if (gap > kBareGap) {
+          std::ostringstream s;
+          s.precision(3);
+          s << "Method 2's rows left the upload near (" << at.x() << ", " << at.y() << ", " << at.z() << ") " << gap
+            << " mean triangle edges from any triangle (they stopped short there), so it was tiled by the global "
+               "method, which covers it";
+          layGlobal(s.str());
         }
+      }
       }
     }
   }
@@ -1718,13 +1728,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   report("measure", 0, "measuring");
   r.metrics = measure(r.hex, surface);
   {
-    std::vector<Vec3> points;
-    if (const auto* mesh = dynamic_cast<const MeshSurface*>(&surface)) {
-      const int n = mesh->vertexCount(), stride = std::max(1, n / 10000);
-      for (int v = 0; v < n; v += stride) points.push_back(mesh->mesh().V.row(v).transpose());
-    } else {
-      for (const LocalGeometry& g : surface.samples(2000)) points.push_back(g.point);
-    }
+    const std::vector<Vec3> points = coverageSamples(surface);
     const double edge = r.hex.meanEdgeLength();
     int where = -1;
     r.coverageGap = edge > 0 ? largestGapToMesh(r.hex, points, &where) / edge : 0.0;

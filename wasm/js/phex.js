@@ -440,14 +440,14 @@ class PHex {
   }
 }
 
-/**
- * Loads phex. In browsers the core runs in a module Web Worker unless `options.worker` is false;
- * where there is no Worker (Node) it runs in the calling thread.
- */
 // A module of one function holding one `try` block: it validates only where the engine has WebAssembly exception
 // handling, which the core is built with (Chrome and Edge 95, Firefox 100, Safari 15.2, node 17 and later).
 const EXCEPTIONS_PROBE = new Uint8Array([0, 97, 115, 109, 1, 0, 0, 0, 1, 4, 1, 96, 0, 0, 3, 2, 1, 0, 10, 7, 1, 5, 0, 6, 64, 11, 11]);
 
+/**
+ * Loads phex. In browsers the core runs in a module Web Worker unless `options.worker` is false;
+ * where there is no Worker (Node) it runs in the calling thread.
+ */
 export async function createPHex(options = {}) {
   if (typeof WebAssembly !== 'object' || !WebAssembly.validate(EXCEPTIONS_PROBE))
     throw new PHexError('unsupported', 'this JavaScript engine lacks WebAssembly exception handling, which the phex ' +
