@@ -553,21 +553,33 @@ std::vector<Vec3> MeshSurface::trialNormals() const {
   return trialNormal;
 }
 
-MeshSurface::VertexFit MeshSurface::fitVertex(int v, int minRings, const Vec3& trialNormal, FitScratch& scratch) const {
+MeshSurface::VertexFit MeshSurface::fitVertex(int v, int minRings, const std::vector<Vec3>& trial, FitScratch& scratch) const {
+  const Vec3& trialNormal = trial[v];
   // The smallest k-ring, k >= 2, with enough points for a cubic jet (capped for safety).
   scratch.patch.assign(1, v);
   scratch.stamp[v] = v;
   std::size_t ringBegin = 0;
+  static const double turnCosine = std::cos(kPatchTurnDegrees * M_PI / 180);
   for (int rings = 1; rings <= 8; ++rings) {
     const std::size_t ringEnd = scratch.patch.size();
+    bool turns = false;  // the ring reaches a vertex whose normal turns too far from v's
     for (std::size_t i = ringBegin; i < ringEnd; ++i) {
       const int u = scratch.patch[i];
       // Not on through a hub (a fan's centre): its neighbours would be every neighbour's ring, all of the mesh.
       if (u != v && neighbourStart_[u + 1] - neighbourStart_[u] > kCrowdedVertex) continue;
       for (int j = neighbourStart_[u]; j < neighbourStart_[u + 1]; ++j) {
         const int w = neighbours_[j];
-        if (scratch.stamp[w] != v) scratch.stamp[w] = v, scratch.patch.push_back(w);
+        if (scratch.stamp[w] == v) continue;
+        scratch.stamp[w] = v, scratch.patch.push_back(w);
+        turns = turns || !(dot(trial[w], trialNormal) >= turnCosine * norm(trial[w]) * norm(trialNormal));
       }
+    }
+    // A noisy mesh's wider rings (past the second) stop before a fold (kPatchTurnDegrees): the intersection
+    // shell and the genus-3 mesh of the shared models, coarse and sharply bent, counted as noisy, and fits over
+    // 5 and 6 rings turned their normals up to 130 degrees from their triangles'.
+    if (turns && rings > 2 && minRings > 2) {
+      scratch.patch.resize(ringEnd);
+      break;
     }
     ringBegin = ringEnd;
     if (scratch.patch.size() == ringEnd || (rings >= minRings && static_cast<int>(scratch.patch.size()) >= kMinJetPoints)) break;
@@ -602,6 +614,11 @@ MeshSurface::VertexFit MeshSurface::fitVertex(int v, int minRings, const Vec3& t
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) tensor(i, j) = RT(i, 0) * R(j, 0) + RT(i, 1) * R(j, 1) + RT(i, 2) * R(j, 2);
     const Vec3 fitted = times(R, fit.normal);
+    // A jet whose normal turns from the triangles' by more than kJetTurnDegrees has not fitted the surface
+    // (a boundary vertex's one-sided patch over a fold: the intersection shell's feet turned by 66-138
+    // degrees): the trial normal stands, and the tensor is taken in its tangent plane (principalFrame).
+    static const double jetCosine = std::cos(kJetTurnDegrees * M_PI / 180);
+    if (pass == 0 && !(dot(fitted, normal) >= jetCosine)) break;
     const bool refit = dot(fitted, normal) < 0.995;  // about 6 degrees
     normal = fitted;
     if (!refit) break;
@@ -624,7 +641,7 @@ TriMesh MeshSurface::refined(int k) const {
   // its fits over 4 rings, spanning a third of its tube, blended into a surface far off it).
   parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
     FitScratch scratch(nv);
-    for (int v = begin; v < end; ++v) jets[v] = fitVertex(v, 2, trial[v], scratch);
+    for (int v = begin; v < end; ++v) jets[v] = fitVertex(v, 2, trial, scratch);
   });
   // x projected onto vertex v's jet (through the vertex: its constant term left out).
   auto onJet = [&](int v, const Vec3& x) -> Vec3 {
@@ -720,7 +737,7 @@ double MeshSurface::estimateCurvature(int minRings) {
   parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
     FitScratch scratch(nv);
     for (int v = begin; v < end; ++v) {
-      const VertexFit fit = fitVertex(v, minRings, trialNormal[v], scratch);
+      const VertexFit fit = fitVertex(v, minRings, trialNormal, scratch);
       residual[v] = fit.residual;
       shapeTensor_[v] = fit.tensor;
       vertexGeometry_[v] = principalFrame(mesh_.V.row(v).transpose(), fit.normal, fit.tensor);

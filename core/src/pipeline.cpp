@@ -928,9 +928,10 @@ std::string uploadNote(const Surface* surface) {
   }
   s << "the uploaded mesh is noisy: its vertices lie " << 100 * mesh->noise()
     << " % of an edge (median) off smooth cubic fits of their neighbourhoods, so its curvature was fitted over "
-    << mesh->curvatureRings() << " rings of neighbours instead of 2; conjugate directions from a noisy mesh "
-       "are unreliable, and its P-Hex nodes are held near a rough surface: smooth the mesh before uploading it "
-       "for better panels";
+    << mesh->curvatureRings()
+    << " rings of neighbours instead of 2 (fewer where the surface folds within them); conjugate directions from a "
+       "noisy mesh are unreliable, and its P-Hex nodes are held near a rough surface: smooth the mesh before "
+       "uploading it for better panels";
   return s.str();
 }
 

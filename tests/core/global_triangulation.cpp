@@ -136,6 +136,10 @@ TEST_CASE("global triangulation: the shared free-form models keep their topology
     // Most interior vertices of valence 6 (hexagons of the P-Hex mesh).
     const TriangulationCheck check = checkTriangulation(t, surface);
     CHECK(check.regularFraction >= 0.8);
+    // As few singular points as the shapes need: the intersection shell's field turned around 800-1500 of them
+    // (its vertex normals, fitted over rings across its ridges, turned past perpendicular) where now about 30.
+    INFO(t.singularities.size() << " singular points, " << check.regularFraction << " of the interior vertices regular");
+    CHECK(t.singularities.size() <= 80);
   }
 }
 

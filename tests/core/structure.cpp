@@ -354,7 +354,7 @@ TEST_CASE("structure: an uploaded free-form mesh") {
     REQUIRE(in);
     PipelineParams p;
     p.mesh = upload("phcpf_six_s0.off", "off", std::string(std::istreambuf_iterator<char>(in), {}));
-    p.faces = 1500;
+    p.faces = 3000;
     const PipelineResult r = runPipeline(p);
     const NodeAxes ax = nodeAxes(r.hex);
     // The solve cut faces here that only folding would make planar: nodes of four or more faces and panels folded
@@ -366,8 +366,10 @@ TEST_CASE("structure: an uploaded free-form mesh") {
     CHECK_THAT(notes, Catch::Contains("nodes " + std::to_string(ax.bestFit[0] + 1)) &&
                           Catch::Contains("nodes " + std::to_string(ax.folded[0] + 1)) && Catch::Contains("fold"));
     for (int v : ax.bestFit) CHECK(ax.nodeFaceOffsets[v + 1] - ax.nodeFaceOffsets[v] >= 3);
-    // The boundary rule: measured 425 of 596 boundary beams planar (42 of 60 runs), the rest kept closest to the
-    // surface normal (their runs would need turns beyond 30°, or have no planar solution).
+    // The boundary rule: measured 261 of 298 boundary beams planar, the rest kept closest to the surface normal
+    // (their runs would need turns beyond 30°, or have no planar solution). (At 1500 faces, 425 of 596 when the
+    // annulus's curvature was fitted over 3 full rings across its sharpest bends; fitted within them, at 1500
+    // faces it cuts 4 faces and no node is left to a best fit.)
     CHECK(ax.boundaryBeamsPlanar >= 0.6 * ax.boundaryBeams);
     CHECK(ax.boundaryRunsPlanar < ax.boundaryRuns);
     // Folds leave the offset a short range: within it the exact parts are exact; beyond, the error names it.

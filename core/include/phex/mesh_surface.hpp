@@ -16,7 +16,8 @@ namespace phex {
 //   neighbourhood the same way. On a
 //   noisy mesh (the vertices' median distance to their fitted jets over kNoisyMesh of the mean edge: a
 //   scan, jittered heights) the fits are redone over wider rings (noise()), since the noise's share of the
-//   curvature falls as the cube of the patch's radius;
+//   curvature falls as the cube of the patch's radius, each stopping before a fold (kPatchTurnDegrees); a
+//   jet whose normal turns far from its triangles' (kJetTurnDegrees) gives way to theirs;
 // - inside a triangle, the vertices' normals and 3D shape tensors (k1 d1 d1^T + k2 d2 d2^T) are
 //   interpolated barycentrically and the tensor is restricted to the tangent plane of the interpolated
 //   normal before its eigen-decomposition, so curvatures and directions vary smoothly (eigenvectors are
@@ -37,6 +38,14 @@ class MeshSurface : public Surface {
   // smooth surfaces stay under 1e-4 (lattices of the analytic surfaces, jittered or graded grids of height
   // fields, coarse ones); heights jittered by 12 % of an edge give 0.04.
   static constexpr double kNoisyMesh = 0.002;
+  // The wider rings of a noisy mesh's fits (past the second) take no vertex whose normal turns from the
+  // fitted vertex's by more than this: a patch across a fold is no height field over any plane, and its jet's
+  // normal is anyone's. (At 40 degrees the genus-3 model's fits kept to 2 rings nearly everywhere, and its
+  // noisier directions took Method 2's trial lays 8 times as long.)
+  static constexpr double kPatchTurnDegrees = 60;
+  // A jet whose normal turns from its vertex's triangles' (area-weighted) by more than this has missed the
+  // surface: the triangles' normal stands.
+  static constexpr double kJetTurnDegrees = 40;
 
   // `mesh` must be clean (as readMesh / cleanTriMesh return it): throws Error(InvalidInput) for no
   // triangles, an index out of range, a non-finite coordinate, an edge used twice in the same direction
@@ -145,7 +154,9 @@ class MeshSurface : public Surface {
     std::vector<Vec3> local;
   };
   std::vector<Vec3> trialNormals() const;
-  VertexFit fitVertex(int v, int minRings, const Vec3& trialNormal, FitScratch& scratch) const;
+  // `trial`: every vertex's trial normal (trialNormals()); rings past the second stop short of a vertex whose
+  // trial normal turns from v's by more than kPatchTurnDegrees.
+  VertexFit fitVertex(int v, int minRings, const std::vector<Vec3>& trial, FitScratch& scratch) const;
   void buildTree();
   void buildGrid();
   // The grid cell holding coordinate x along `axis`, clamped to the grid (NaN: 0).
