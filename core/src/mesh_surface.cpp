@@ -560,9 +560,14 @@ MeshSurface::VertexFit MeshSurface::fitVertex(int v, int minRings, const std::ve
   scratch.stamp[v] = v;
   std::size_t ringBegin = 0;
   static const double turnCosine = std::cos(kPatchTurnDegrees * M_PI / 180);
+  const double trialLength = norm(trialNormal);
   for (int rings = 1; rings <= 8; ++rings) {
     const std::size_t ringEnd = scratch.patch.size();
-    bool turns = false;  // the ring reaches a vertex whose normal turns too far from v's
+    // A noisy mesh's wider rings (past the second) stop before a fold (kPatchTurnDegrees): the intersection
+    // shell and the genus-3 mesh of the shared models, coarse and sharply bent, counted as noisy, and fits over
+    // 5 and 6 rings turned their normals up to 130 degrees from their triangles'.
+    const bool guarded = minRings > 2 && rings > 2;
+    bool turns = false;  // (guarded) the ring reaches a vertex whose normal turns too far from v's
     for (std::size_t i = ringBegin; i < ringEnd; ++i) {
       const int u = scratch.patch[i];
       // Not on through a hub (a fan's centre): its neighbours would be every neighbour's ring, all of the mesh.
@@ -571,13 +576,10 @@ MeshSurface::VertexFit MeshSurface::fitVertex(int v, int minRings, const std::ve
         const int w = neighbours_[j];
         if (scratch.stamp[w] == v) continue;
         scratch.stamp[w] = v, scratch.patch.push_back(w);
-        turns = turns || !(dot(trial[w], trialNormal) >= turnCosine * norm(trial[w]) * norm(trialNormal));
+        if (guarded && !turns) turns = !(dot(trial[w], trialNormal) >= turnCosine * norm(trial[w]) * trialLength);
       }
     }
-    // A noisy mesh's wider rings (past the second) stop before a fold (kPatchTurnDegrees): the intersection
-    // shell and the genus-3 mesh of the shared models, coarse and sharply bent, counted as noisy, and fits over
-    // 5 and 6 rings turned their normals up to 130 degrees from their triangles'.
-    if (turns && rings > 2 && minRings > 2) {
+    if (turns) {
       scratch.patch.resize(ringEnd);
       break;
     }
