@@ -18,6 +18,9 @@ using namespace phex;
 
 namespace {
 
+// Panels whose planes turn by less than this (sine; about 0.06 degrees) count as nearly in one plane.
+constexpr double kNearlyCoplanar = 1e-3;
+
 // A polyhedron circumscribed about the sphere of radius R at the origin: the tangent planes at the vertices of a
 // once-subdivided icosahedron on the sphere (42 faces: 12 pentagons, 30 hexagons), each node where three of them
 // meet. Every node's three planes touch the sphere, so its axis runs through the centre, and the offset at d is
@@ -123,6 +126,10 @@ void checkExactParts(const PolyMesh& hex, const NodeAxes& ax, double d, double h
     if (!exact(e.a) || !exact(e.b) || (ax.position.row(e.b) - ax.position.row(e.a)).norm() < kOffsetEdgeVanishes * edge) continue;
     if (e.right >= 0) {
       CHECK(layer.beams[i].planarity <= 1e-9);
+      // Between panels nearly in one plane the edge's line is fixed by their planes only to the planarity over the
+      // angle they turn by (six_s0's annulus at 3000 faces: 0.008 degrees, its line to 5e-9): left out, as the
+      // degenerate beams are.
+      if (orientedPlane(hex, e.left).normal.cross(orientedPlane(hex, e.right).normal).norm() < kNearlyCoplanar) continue;
       const Vec3 along = (ax.position.row(e.b) - ax.position.row(e.a)).transpose().normalized();
       const Vec3 aa = ax.axis.row(e.a).transpose().normalized(), ab = ax.axis.row(e.b).transpose().normalized();
       coplanar = std::max(coplanar, std::abs(along.cross(aa).dot(ab)));
@@ -355,6 +362,8 @@ TEST_CASE("structure: an uploaded free-form mesh") {
     PipelineParams p;
     p.mesh = upload("phcpf_six_s0.off", "off", std::string(std::istreambuf_iterator<char>(in), {}));
     p.faces = 3000;
+    // From the tangent dual, whose solve cuts some 300 faces here (under auto the Dupin dual's is kept: it cuts 4).
+    p.duality = Duality::Tangent;
     const PipelineResult r = runPipeline(p);
     const NodeAxes ax = nodeAxes(r.hex);
     // The solve cut faces here that only folding would make planar: nodes of four or more faces and panels folded
@@ -366,11 +375,11 @@ TEST_CASE("structure: an uploaded free-form mesh") {
     CHECK_THAT(notes, Catch::Contains("nodes " + std::to_string(ax.bestFit[0] + 1)) &&
                           Catch::Contains("nodes " + std::to_string(ax.folded[0] + 1)) && Catch::Contains("fold"));
     for (int v : ax.bestFit) CHECK(ax.nodeFaceOffsets[v + 1] - ax.nodeFaceOffsets[v] >= 3);
-    // The boundary rule: measured 261 of 298 boundary beams planar, the rest kept closest to the surface normal
-    // (their runs would need turns beyond 30°, or have no planar solution). (At 1500 faces, 425 of 596 when the
-    // annulus's curvature was fitted over 3 full rings across its sharpest bends; fitted within them, at 1500
-    // faces it cuts 4 faces and no node is left to a best fit.)
-    CHECK(ax.boundaryBeamsPlanar >= 0.6 * ax.boundaryBeams);
+    // The boundary rule: measured 192 of 307 boundary beams planar (11 of 26 runs), the rest kept closest to the
+    // surface normal (their runs would need turns beyond 30°, or have no planar solution). (From the Dupin dual,
+    // 261 of 298; at 1500 faces, 425 of 596 when the annulus's curvature was fitted over 3 full rings across its
+    // sharpest bends.) At least half.
+    CHECK(ax.boundaryBeamsPlanar >= 0.5 * ax.boundaryBeams);
     CHECK(ax.boundaryRunsPlanar < ax.boundaryRuns);
     // Folds leave the offset a short range: within it the exact parts are exact; beyond, the error names it.
     REQUIRE(ax.offsetMax > 0);

@@ -9,6 +9,7 @@
 #include <queue>
 #include <sstream>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "global.hpp"
 #include "phex/error.hpp"
@@ -73,7 +74,9 @@ class Extractor {
     }
     out.repairs = repairs;
     std::vector<int> bad;
-    out.mesh = dual(bad, &out.seeds);
+    std::vector<int> siteOf;
+    out.mesh = dual(bad, &out.seeds, &siteOf);
+    const int notches = closeNotches(out.mesh, siteOf);
     if (!bad.empty()) {
       std::ostringstream s;
       s.precision(4);
@@ -100,7 +103,8 @@ class Extractor {
     notes_.insert(notes_.begin(), "global triangulation: " + std::to_string(out.mesh.V.rows()) + " vertices (" +
                                       std::to_string(boundarySiteCount()) + " on the boundary), " +
                                       std::to_string(repairs) + (repairs == 1 ? " lattice point" : " lattice points") +
-                                      " added or removed to connect the regions");
+                                      " added or removed to connect the regions" +
+                                      (notches > 0 ? ", " + std::to_string(notches) + " notches in the boundary closed" : ""));
     out.notes = notes_;
     return out;
   }
@@ -372,6 +376,41 @@ class Extractor {
     for (std::size_t f = 0; f < tris.size(); ++f)
       for (int k = 0; k < 3; ++k) out.F(static_cast<int>(f), k) = id[tris[f][k]];
     return out;
+  }
+
+  // An interior site the rounds of mending left on the triangulation's boundary (its region reaches the boundary
+  // curve between two boundary sites that never became neighbours) makes a notch: two boundary edges dipping
+  // inside, the surface between them bare (the Concerthall at 1000 faces: one, 0.7 of a cell deep). The triangle
+  // of the site and those two boundary sites closes it, where they are not joined already. Returns how many.
+  int closeNotches(TriMesh& T, const std::vector<int>& siteOf) const {
+    const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
+    auto key = [nv](int a, int b) { return std::uint64_t(a) * std::uint64_t(nv) + std::uint64_t(b); };
+    std::unordered_set<std::uint64_t> half;
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) half.insert(key(T.F(f, k), T.F(f, (k + 1) % 3)));
+    // Per vertex, its boundary half-edges in and out (-1: none; -2: more than one).
+    std::vector<int> in(nv, -1), out(nv, -1);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int a = T.F(f, k), b = T.F(f, (k + 1) % 3);
+        if (half.count(key(b, a))) continue;
+        out[a] = out[a] == -1 ? b : -2;
+        in[b] = in[b] == -1 ? a : -2;
+      }
+    std::vector<Eigen::Vector3i> added;
+    std::vector<char> used(nv, 0);
+    for (int v = 0; v < nv; ++v) {
+      const int a = in[v], b = out[v];
+      if (a < 0 || b < 0 || a == b || sites_[siteOf[v]].loop >= 0) continue;
+      if (sites_[siteOf[a]].loop < 0 || sites_[siteOf[b]].loop < 0 || used[a] || used[b] || used[v]) continue;
+      if (half.count(key(a, b)) || half.count(key(b, a))) continue;
+      added.push_back(Eigen::Vector3i(v, a, b));  // half-edges v -> a and b -> v pair the boundary's a -> v, v -> b
+      used[a] = used[b] = used[v] = 1;
+    }
+    if (added.empty()) return 0;
+    T.F.conservativeResize(nf + static_cast<int>(added.size()), 3);
+    for (std::size_t i = 0; i < added.size(); ++i) T.F.row(nf + static_cast<int>(i)) = added[i].transpose();
+    return static_cast<int>(added.size());
   }
 
   // One round of mending: returns how many sites were added or removed.

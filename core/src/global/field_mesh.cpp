@@ -21,6 +21,17 @@ constexpr double kCoarseSplit = 3.0;
 // Edges longer than this many field-mesh edges after the uniform split are bisected.
 constexpr double kLongEdge = 1.3;
 constexpr double kAreaSplitMargin = 4.0;
+// The half-width of the window the boundary's direction is taken over, in field-mesh edges (about a cell).
+constexpr double kTangentWindow = 2.5;
+// ... and at least this many of the coarse mesh's boundary edges (a zigzag's teeth are two long: a tent as wide as
+// a tooth cancels them), but at most kLongestWindow field-mesh edges (about 2.5 cells): teeth longer than a cell
+// are the boundary's own shape, which the lattice follows (the bubble shell's boundary of 88 edges, each 3.7 cells
+// long at 10k faces, smoothed over 3 of them: 267 faces cut against 76).
+constexpr double kToothWindow = 3.0, kLongestWindow = 6.5;
+// A boundary corner turns by more than this over the window on either side (cosine of 40 degrees).
+constexpr double kCornerCos = 0.766;
+// ... judged over chords this many windows long (over one, the teeth of a zigzag boundary turn by as much).
+constexpr double kCornerWindow = 2.0;
 // The Dupin frame's aspect (sqrt of |k| ratio, regularized) from which the field is aligned, and fully.
 constexpr double kAlignFrom = 1.2, kAlignFull = 1.7;
 // The regularization of the aspect that decides the alignment, as a share of the metric's.
@@ -186,7 +197,28 @@ TriMesh refine(const TriMesh& mesh, const TriMesh& fine, std::vector<int> source
   return out;
 }
 
-void buildTopology(FieldMesh& m) {
+// The median length of the boundary edges of `mesh` (edges of one triangle), 0 where it has none.
+double medianBoundaryEdge(const TriMesh& mesh) {
+  std::vector<std::pair<int, int>> edges;
+  for (int f = 0; f < mesh.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = mesh.F(f, c), b = mesh.F(f, (c + 1) % 3);
+      edges.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  std::sort(edges.begin(), edges.end());
+  std::vector<double> lengths;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i == 1) lengths.push_back((mesh.V.row(edges[i].first) - mesh.V.row(edges[i].second)).norm());
+    i = j;
+  }
+  if (lengths.empty()) return 0.0;
+  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+  return lengths[lengths.size() / 2];
+}
+
+void buildTopology(FieldMesh& m, double window) {
   const int nv = m.vertexCount(), nf = static_cast<int>(m.F.rows());
   // Adjacency.
   std::vector<int> count(nv + 1, 0);
@@ -234,11 +266,76 @@ void buildTopology(FieldMesh& m) {
     for (int w = v; w >= 0 && !m.boundary[w]; w = next[w]) m.boundary[w] = 1, loop.push_back(w);
     m.loops.push_back(std::move(loop));
   }
+  // The boundary's direction at each of its vertices, taken over a window of `window` on either side: the edge
+  // vectors of the loop weighted by a tent of that half-width about the vertex (by arc length), so that a boundary
+  // that zigzags at the scale of its triangles (a lattice cut off along a curve) gives the direction of its curve and
+  // not of each tooth, which the field, held to it, would otherwise turn by up to 30 degrees from one boundary
+  // vertex to the next (the uploaded bumps at 10k faces had 131 singular points, nearly all in pairs along the
+  // boundary; now 26).
+  // The window stops at the boundary's corners — where the chords a window long behind and ahead of a vertex turn
+  // by more than 40 degrees (kCornerCos), most there within two windows (kCornerWindow) — and a corner takes the direction of its two edges.
   m.boundaryTangent.assign(nv, Vec3::Zero());
   for (const std::vector<int>& loop : m.loops) {
     const int n = static_cast<int>(loop.size());
+    std::vector<Vec3> edge(n);
+    std::vector<double> at(n + 1, 0.0);  // arc length at each vertex of the loop, and its perimeter at n
     for (int i = 0; i < n; ++i) {
-      const Vec3 d = m.point(loop[(i + 1) % n]) - m.point(loop[(i + n - 1) % n]);
+      edge[i] = m.point(loop[(i + 1) % n]) - m.point(loop[i]);
+      at[i + 1] = at[i] + norm(edge[i]);
+    }
+    const double perimeter = at[n], w = std::min(window, 0.25 * perimeter);
+    // Arc length from vertex i forward to vertex j.
+    auto ahead = [&](int i, int j) { return j >= i ? at[j] - at[i] : perimeter - at[i] + at[j]; };
+    // The point of the loop at arc length s past vertex i (s may be negative).
+    auto pointAt = [&](int i, double s) {
+      int j = i;
+      if (s >= 0) {
+        for (int k = 0; k < n; ++k, j = (j + 1) % n) {
+          const double e = norm(edge[j]), from = ahead(i, j);
+          if (from + e >= s) return Vec3(m.point(loop[j]) + edge[j] * ((s - from) / std::max(e, 1e-300)));
+        }
+      } else {
+        for (int k = 0; k < n; ++k) {
+          const int p = (j - 1 + n) % n;
+          const double e = norm(edge[p]), to = ahead(j, i);
+          if (to + e >= -s) return Vec3(m.point(loop[j]) - edge[p] * ((-s - to) / std::max(e, 1e-300)));
+          j = p;
+        }
+      }
+      return m.point(loop[i]);
+    };
+    std::vector<double> turn(n, 0.0);
+    for (int i = 0; i < n; ++i) {
+      const Vec3 x = m.point(loop[i]), behind = x - pointAt(i, -kCornerWindow * w), forward = pointAt(i, kCornerWindow * w) - x;
+      const double b = norm(behind), f = norm(forward);
+      turn[i] = b > 0 && f > 0 ? 1 - dot(behind, forward) / (b * f) : 0.0;  // 1 - cos of the turn
+    }
+    std::vector<char> corner(n, 0);
+    for (int i = 0; i < n; ++i) {
+      if (!(turn[i] > 1 - kCornerCos)) continue;
+      bool most = true;
+      for (int k = 1; k < n && most && ahead(i, (i + k) % n) <= kCornerWindow * w; ++k) most = turn[(i + k) % n] < turn[i];
+      for (int k = 1; k < n && most && ahead((i - k + n) % n, i) <= kCornerWindow * w; ++k) most = turn[(i - k + n) % n] <= turn[i];
+      corner[i] = most;
+    }
+    for (int i = 0; i < n; ++i) {
+      Vec3 d = edge[i] + edge[(i + n - 1) % n];
+      if (!corner[i]) {
+        d = Vec3::Zero();
+        // The edges ahead (j = i, i+1, ...) and behind (i-1, i-2, ...) whose middles lie within the window, up to a corner.
+        for (int k = 0; k < n; ++k) {
+          const int j = (i + k) % n;
+          const double weight = 1 - (ahead(i, j) + 0.5 * norm(edge[j])) / std::max(w, 1e-300);
+          if (k > 0 && (weight <= 0 || corner[j])) break;
+          d += std::max(weight, 1e-3) * edge[j];
+        }
+        for (int k = 1; k < n; ++k) {
+          const int j = (i - k + n) % n;
+          const double weight = 1 - (ahead((j + 1) % n, i) + 0.5 * norm(edge[j])) / std::max(w, 1e-300);
+          if (k > 1 && (weight <= 0 || corner[(j + 1) % n])) break;
+          d += std::max(weight, 1e-3) * edge[j];
+        }
+      }
       m.boundaryTangent[loop[i]] = normalized(tangential(d, m.frame[loop[i]].n));
     }
   }
@@ -392,7 +489,7 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, cons
     const double beyond = aspect / std::min(ratio, anisotropy);
     m.alignWeight[v] = std::clamp((beyond - kAlignFrom) / (kAlignFull - kAlignFrom), 0.0, 1.0);
   }
-  buildTopology(m);
+  buildTopology(m, std::max(kTangentWindow * edge, std::min(kToothWindow * medianBoundaryEdge(m.coarse), kLongestWindow * edge)));
   return m;
 }
 
