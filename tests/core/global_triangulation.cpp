@@ -143,7 +143,7 @@ TEST_CASE("global triangulation: the shared free-form models keep their topology
   }
 }
 
-TEST_CASE("global triangulation: planar to 1e-9, every node of three faces and no face cut away from the boundary panels, where the surface allows") {
+TEST_CASE("global triangulation: planar to 1e-9 with every node of three faces and no face cut, where the surface allows") {
   // Surfaces without parabolic curves, where the lattice's stars are valid (Props. 4, 5): the pipeline needs no cut.
   for (const std::string name : {"catenoid", "hyperbolic-paraboloid"}) {
     CAPTURE(name);
@@ -154,10 +154,7 @@ TEST_CASE("global triangulation: planar to 1e-9, every node of three faces and n
     const PipelineResult r = runPipeline(p);
     CHECK(r.solve.converged);
     CHECK(r.metrics.planarityMax <= 1e-9);
-    // At most a face in 200 cut, and only beside the boundary panels (the nodes check below): an interior face
-    // touching a boundary panel the solve left off planar is cut with it (the hyperbolic paraboloid at 700, 800
-    // and 900 faces: 0, 2 and 1).
-    CHECK(r.interiorFacesSplit <= r.hex.faceCount() / 200);
+    CHECK(r.interiorFacesSplit == 0);
     CHECK(r.metrics.selfIntersectingCount == 0);
     CHECK(std::abs(double(r.hex.faceCount()) / 800 - 1) <= 0.1);
     // Nodes away from the boundary panels join three faces. (A boundary panel the solve leaves off planar is still

@@ -362,7 +362,7 @@ TEST_CASE("structure: an uploaded free-form mesh") {
     PipelineParams p;
     p.mesh = upload("phcpf_six_s0.off", "off", std::string(std::istreambuf_iterator<char>(in), {}));
     p.faces = 3000;
-    // From the tangent dual, whose solve cuts some 300 faces here (under auto the Dupin dual's is kept: it cuts 4).
+    // From the tangent dual, whose solve cuts some 300 faces here (under auto the Dupin dual's is kept: it cuts 1).
     p.duality = Duality::Tangent;
     const PipelineResult r = runPipeline(p);
     const NodeAxes ax = nodeAxes(r.hex);

@@ -21,13 +21,15 @@ constexpr double kCoarseSplit = 3.0;
 // Edges longer than this many field-mesh edges after the uniform split are bisected.
 constexpr double kLongEdge = 1.3;
 constexpr double kAreaSplitMargin = 4.0;
-// The half-width of the window the boundary's direction is taken over, in field-mesh edges (about a cell).
+// The half-width of the window a zigzag boundary's direction is taken over (buildTopology): at least
+// kTangentWindow field-mesh edges (about a cell) and kToothWindow of the coarse mesh's boundary edges (a zigzag's
+// teeth are two long: a tent as wide as a tooth cancels them), but at most kLongestWindow field-mesh edges (about 3
+// cells): longer teeth are the boundary's own shape, which the lattice can follow. (A zigzag of 0.1 edges cut at
+// 20 degrees through a lattice: 6 degrees off at most.) A loop zigzags where over kZigzagShare of its coarse
+// vertices turn by over kToothTurn (sine) in the sense opposite to the next one's; a polygon of long straight edges
+// (the bubble shell's 88) does not, and its rows follow each edge.
 constexpr double kTangentWindow = 2.5;
-// ... and at least this many of the coarse mesh's boundary edges (a zigzag's teeth are two long: a tent as wide as
-// a tooth cancels them), but at most kLongestWindow field-mesh edges (about 2.5 cells): teeth longer than a cell
-// are the boundary's own shape, which the lattice follows (the bubble shell's boundary of 88 edges, each 3.7 cells
-// long at 10k faces, smoothed over 3 of them: 267 faces cut against 76).
-constexpr double kToothWindow = 3.0, kLongestWindow = 6.5;
+constexpr double kToothWindow = 3.0, kLongestWindow = 8.0, kToothTurn = 0.17, kZigzagShare = 0.3;
 // A boundary corner turns by more than this over the window on either side (cosine of 40 degrees).
 constexpr double kCornerCos = 0.766;
 // ... judged over chords this many windows long (over one, the teeth of a zigzag boundary turn by as much).
@@ -218,7 +220,29 @@ double medianBoundaryEdge(const TriMesh& mesh) {
   return lengths[lengths.size() / 2];
 }
 
-void buildTopology(FieldMesh& m, double window) {
+// Whether a boundary loop zigzags: among its vertices of the coarse mesh (ids under `coarse`), in order, the share
+// of consecutive pairs that turn by more than kToothTurn each and in opposite senses is over kZigzagShare.
+bool zigzags(const FieldMesh& m, const std::vector<int>& loop, int coarse) {
+  std::vector<int> corners;
+  for (int v : loop)
+    if (v < coarse) corners.push_back(v);
+  const int n = static_cast<int>(corners.size());
+  if (n < 6) return false;
+  std::vector<int> sense(n, 0);
+  for (int i = 0; i < n; ++i) {
+    const int a = corners[(i + n - 1) % n], b = corners[i], c = corners[(i + 1) % n];
+    const Vec3 in = m.point(b) - m.point(a), out = m.point(c) - m.point(b);
+    const double lengths = norm(in) * norm(out);
+    if (!(lengths > 0)) continue;
+    const double sine = dot(cross(in, out), m.frame[b].n) / lengths;
+    if (std::abs(sine) > kToothTurn) sense[i] = sine > 0 ? 1 : -1;
+  }
+  int alternating = 0;
+  for (int i = 0; i < n; ++i) alternating += sense[i] * sense[(i + 1) % n] < 0;
+  return alternating > kZigzagShare * n;
+}
+
+void buildTopology(FieldMesh& m, double window, int coarse) {
   const int nv = m.vertexCount(), nf = static_cast<int>(m.F.rows());
   // Adjacency.
   std::vector<int> count(nv + 1, 0);
@@ -266,17 +290,24 @@ void buildTopology(FieldMesh& m, double window) {
     for (int w = v; w >= 0 && !m.boundary[w]; w = next[w]) m.boundary[w] = 1, loop.push_back(w);
     m.loops.push_back(std::move(loop));
   }
-  // The boundary's direction at each of its vertices, taken over a window of `window` on either side: the edge
-  // vectors of the loop weighted by a tent of that half-width about the vertex (by arc length), so that a boundary
-  // that zigzags at the scale of its triangles (a lattice cut off along a curve) gives the direction of its curve and
-  // not of each tooth, which the field, held to it, would otherwise turn by up to 30 degrees from one boundary
-  // vertex to the next (the uploaded bumps at 10k faces had 131 singular points, nearly all in pairs along the
-  // boundary; now 26).
-  // The window stops at the boundary's corners — where the chords a window long behind and ahead of a vertex turn
-  // by more than 40 degrees (kCornerCos), most there within two windows (kCornerWindow) — and a corner takes the direction of its two edges.
+  // The boundary's direction at each of its vertices: the chord through its two neighbours on the loop; on a loop
+  // that zigzags at the scale of its coarse mesh's triangles (a lattice cut off along a curve: zigzags()), over a
+  // window of `window` on either side instead — the edge vectors of the loop weighted by a tent of that
+  // half-width about the vertex (by arc length) — so that it gives the direction of the curve and not of each
+  // tooth, which the field, held to it, would otherwise turn by up to 30 degrees from one boundary vertex to the
+  // next (the uploaded bumps at 10k faces had 131 singular points, nearly all in pairs along the boundary; now 26).
+  // The window stops at the loop's corners — where the chords kCornerWindow windows long behind and ahead of a
+  // vertex turn by more than 40 degrees (kCornerCos), most there within as far — and a corner takes the chord.
   m.boundaryTangent.assign(nv, Vec3::Zero());
   for (const std::vector<int>& loop : m.loops) {
     const int n = static_cast<int>(loop.size());
+    if (!zigzags(m, loop, coarse)) {
+      for (int i = 0; i < n; ++i) {
+        const Vec3 d = m.point(loop[(i + 1) % n]) - m.point(loop[(i + n - 1) % n]);
+        m.boundaryTangent[loop[i]] = normalized(tangential(d, m.frame[loop[i]].n));
+      }
+      continue;
+    }
     std::vector<Vec3> edge(n);
     std::vector<double> at(n + 1, 0.0);  // arc length at each vertex of the loop, and its perimeter at n
     for (int i = 0; i < n; ++i) {
@@ -489,7 +520,8 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, cons
     const double beyond = aspect / std::min(ratio, anisotropy);
     m.alignWeight[v] = std::clamp((beyond - kAlignFrom) / (kAlignFull - kAlignFrom), 0.0, 1.0);
   }
-  buildTopology(m, std::max(kTangentWindow * edge, std::min(kToothWindow * medianBoundaryEdge(m.coarse), kLongestWindow * edge)));
+  buildTopology(m, std::max(kTangentWindow * edge, std::min(kToothWindow * medianBoundaryEdge(m.coarse), kLongestWindow * edge)),
+                static_cast<int>(m.coarse.V.rows()));
   return m;
 }
 
