@@ -1409,7 +1409,7 @@ constexpr std::size_t kSeamShare = 10;
 // Of two solves from the two duals that both stopped short of the tolerance, the one with fewer interior faces
 // cut is kept where the counts differ by more than one face in this many; else the one nearer planar. Kept by
 // planarity alone, the tangent dual's solve won on four of the five shared models the global method tiles
-// short of the tolerance at 3000 faces, having cut 274-609 faces (5-17 % of them, each cut making two nodes of
+// short of the tolerance at 3000 faces, having cut 274-609 faces (8-17 % of them, each cut making two nodes of
 // four faces) for a planarity 1.2-4.5 times lower, where the Dupin dual's cut 1-6 (60-76 % hexagons against
 // 89-92 %).
 constexpr std::size_t kCutsApart = 100;

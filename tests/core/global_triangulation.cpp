@@ -279,6 +279,22 @@ TEST_CASE("pipeline: under auto, a closed upload whose Euler characteristic is n
   }
 }
 
+TEST_CASE("pipeline: where both duals' solves stall, the one that cut fewer faces is kept") {
+  // PH-CPF's genus-3 model and Directional's concert-hall roof at 3000 faces: neither dual's solve reaches 1e-9.
+  // Kept by planarity, the tangent dual's won, having cut 609 and 469 faces (60 % and 66 % hexagons); the Dupin
+  // dual's cuts 4 and 6.
+  for (const std::string file : {"phcpf_3holes_r.off", "directional_Concerthall.off"}) {
+    CAPTURE(file);
+    PipelineParams p;
+    p.mesh = upload(file);
+    p.faces = 3000;
+    const PipelineResult r = runPipeline(p);
+    CHECK(r.method == TriangulationMethod::Global);
+    INFO(r.interiorFacesSplit << " interior faces cut of " << r.hex.faceCount());
+    CHECK(r.interiorFacesSplit <= r.hex.faceCount() / 100);
+  }
+}
+
 TEST_CASE("pipeline: a surface fully covered by its panels has no gap note") {
   PipelineParams p;
   p.surface = "torus";
