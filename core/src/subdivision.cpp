@@ -418,9 +418,8 @@ SubdivisionTriangulation subdivisionTriangulation(const TriMesh& control, int le
 
 bool closedConvexUpload(const MeshSurface& surface) {
   const TriMesh& m = surface.mesh();
-  const Eigen::Index nv = m.V.rows(), nf = m.F.rows();
-  // Closed (every edge in two triangles) and genus 0: V - E + F = V - F / 2 = 2.
-  if (!surface.isClosed() || nv - nf / 2 != 2 || nf % 2 != 0) return false;
+  const Eigen::Index nv = m.V.rows();
+  if (!surface.isClosed() || surface.eulerCharacteristic() != 2) return false;  // closed, genus 0
   const Vec3 centre = m.V.colwise().mean().transpose();
   // Strictly convex: K > 0 at kConvexShare of the vertices. Where the surface flattens (a rounded box's sides
   // and the cylinders between them) the Dupin conics stretch, and the geodesic's near-equilateral triangles

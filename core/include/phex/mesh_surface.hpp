@@ -65,6 +65,10 @@ class MeshSurface : public Surface {
 
   const TriMesh& mesh() const { return mesh_; }
   int vertexCount() const { return static_cast<int>(mesh_.V.rows()); }
+  // V - E + F: 2 - 2g for a closed surface of genus g (summed over its components), 1 for a disk.
+  int eulerCharacteristic() const {
+    return vertexCount() - static_cast<int>(neighbours_.size() / 2) + static_cast<int>(mesh_.F.rows());
+  }
   // The estimated geometry at vertex i (point = the vertex).
   const LocalGeometry& vertexGeometry(int i) const { return vertexGeometry_[i]; }
   const std::vector<LocalGeometry>& vertexGeometries() const { return vertexGeometry_; }

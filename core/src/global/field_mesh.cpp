@@ -21,7 +21,7 @@ constexpr double kCoarseSplit = 3.0;
 // Edges longer than this many field-mesh edges after the uniform split are bisected.
 constexpr double kLongEdge = 1.3;
 constexpr double kAreaSplitMargin = 4.0;
-// The half-width of the window a zigzag boundary's direction is taken over (buildTopology): at least
+// The half-width of the window a zigzag boundary's direction is taken over (zigzagWindow): at least
 // kTangentWindow field-mesh edges (about a cell) and kToothWindow of the coarse mesh's boundary edges (a zigzag's
 // teeth are two long: a tent as wide as a tooth cancels them), but at most kLongestWindow field-mesh edges (about 3
 // cells): longer teeth are the boundary's own shape, which the lattice can follow. (A zigzag of 0.1 edges cut at
@@ -199,33 +199,18 @@ TriMesh refine(const TriMesh& mesh, const TriMesh& fine, std::vector<int> source
   return out;
 }
 
-// The median length of the boundary edges of `mesh` (edges of one triangle), 0 where it has none.
-double medianBoundaryEdge(const TriMesh& mesh) {
-  std::vector<std::pair<int, int>> edges;
-  for (int f = 0; f < mesh.F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int a = mesh.F(f, c), b = mesh.F(f, (c + 1) % 3);
-      edges.emplace_back(std::min(a, b), std::max(a, b));
-    }
-  std::sort(edges.begin(), edges.end());
-  std::vector<double> lengths;
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    if (j - i == 1) lengths.push_back((mesh.V.row(edges[i].first) - mesh.V.row(edges[i].second)).norm());
-    i = j;
-  }
-  if (lengths.empty()) return 0.0;
-  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
-  return lengths[lengths.size() / 2];
-}
-
-// Whether a boundary loop zigzags: among its vertices of the coarse mesh (ids under `coarse`), in order, the share
-// of consecutive pairs that turn by more than kToothTurn each and in opposite senses is over kZigzagShare.
-bool zigzags(const FieldMesh& m, const std::vector<int>& loop, int coarse) {
+// A boundary loop's vertices of the coarse mesh (ids under `coarse`), in order: the ends of its coarse edges.
+std::vector<int> coarseCorners(const std::vector<int>& loop, int coarse) {
   std::vector<int> corners;
   for (int v : loop)
     if (v < coarse) corners.push_back(v);
+  return corners;
+}
+
+// Whether a boundary loop zigzags: among its coarse corners, the share of consecutive pairs that turn by more than
+// kToothTurn each and in opposite senses is over kZigzagShare.
+bool zigzags(const FieldMesh& m, const std::vector<int>& loop, int coarse) {
+  const std::vector<int> corners = coarseCorners(loop, coarse);
   const int n = static_cast<int>(corners.size());
   if (n < 6) return false;
   std::vector<int> sense(n, 0);
@@ -242,7 +227,24 @@ bool zigzags(const FieldMesh& m, const std::vector<int>& loop, int coarse) {
   return alternating > kZigzagShare * n;
 }
 
-void buildTopology(FieldMesh& m, double window, int coarse) {
+// The half-width of the window a zigzag loop's direction is taken over (see kToothWindow), for field-mesh edges of
+// `edge`: the coarse mesh's boundary edges are the steps between the loops' consecutive coarse corners.
+double zigzagWindow(const FieldMesh& m, int coarse, double edge) {
+  std::vector<double> lengths;
+  for (const std::vector<int>& loop : m.loops) {
+    const std::vector<int> corners = coarseCorners(loop, coarse);
+    for (std::size_t i = 0; i < corners.size(); ++i)
+      lengths.push_back((m.coarse.V.row(corners[i]) - m.coarse.V.row(corners[(i + 1) % corners.size()])).norm());
+  }
+  double median = 0;
+  if (!lengths.empty()) {
+    std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+    median = lengths[lengths.size() / 2];
+  }
+  return std::max(kTangentWindow * edge, std::min(kToothWindow * median, kLongestWindow * edge));
+}
+
+void buildTopology(FieldMesh& m, double fieldEdge, int coarse) {
   const int nv = m.vertexCount(), nf = static_cast<int>(m.F.rows());
   // Adjacency.
   std::vector<int> count(nv + 1, 0);
@@ -292,13 +294,14 @@ void buildTopology(FieldMesh& m, double window, int coarse) {
   }
   // The boundary's direction at each of its vertices: the chord through its two neighbours on the loop; on a loop
   // that zigzags at the scale of its coarse mesh's triangles (a lattice cut off along a curve: zigzags()), over a
-  // window of `window` on either side instead — the edge vectors of the loop weighted by a tent of that
+  // window of zigzagWindow() on either side instead — the edge vectors of the loop weighted by a tent of that
   // half-width about the vertex (by arc length) — so that it gives the direction of the curve and not of each
   // tooth, which the field, held to it, would otherwise turn by up to 30 degrees from one boundary vertex to the
   // next (the uploaded bumps at 10k faces had 131 singular points, nearly all in pairs along the boundary; now 26).
   // The window stops at the loop's corners — where the chords kCornerWindow windows long behind and ahead of a
   // vertex turn by more than 40 degrees (kCornerCos), most there within as far — and a corner takes the chord.
   m.boundaryTangent.assign(nv, Vec3::Zero());
+  double window = -1;  // zigzagWindow's, taken at the first loop that zigzags
   for (const std::vector<int>& loop : m.loops) {
     const int n = static_cast<int>(loop.size());
     if (!zigzags(m, loop, coarse)) {
@@ -314,6 +317,7 @@ void buildTopology(FieldMesh& m, double window, int coarse) {
       edge[i] = m.point(loop[(i + 1) % n]) - m.point(loop[i]);
       at[i + 1] = at[i] + norm(edge[i]);
     }
+    if (window < 0) window = zigzagWindow(m, coarse, fieldEdge);
     const double perimeter = at[n], w = std::min(window, 0.25 * perimeter);
     // Arc length from vertex i forward to vertex j.
     auto ahead = [&](int i, int j) { return j >= i ? at[j] - at[i] : perimeter - at[i] + at[j]; };
@@ -520,8 +524,7 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, cons
     const double beyond = aspect / std::min(ratio, anisotropy);
     m.alignWeight[v] = std::clamp((beyond - kAlignFrom) / (kAlignFull - kAlignFrom), 0.0, 1.0);
   }
-  buildTopology(m, std::max(kTangentWindow * edge, std::min(kToothWindow * medianBoundaryEdge(m.coarse), kLongestWindow * edge)),
-                static_cast<int>(m.coarse.V.rows()));
+  buildTopology(m, edge, static_cast<int>(m.coarse.V.rows()));
   return m;
 }
 
