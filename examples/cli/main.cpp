@@ -56,11 +56,13 @@ Options of `phex run`:
   --anisotropy A            global: largest ratio of the Dupin metric's axes followed, 1..8 (default 1.5;
                             1 gives triangles equilateral in space)
   --alignment W             global: weight of the alignment with the flatter principal direction, 0..10
-                            (default 1; 0 leaves the field free but for the boundary)
+                            (default 1; 0 leaves the field free but for the boundary; on smooth surfaces
+                            a stronger pull often cuts fewer faces next to parabolic curves)
   --curvature-sizing S      global: how far the cell follows the curvature, 0..1 (default 0: uniform)
   --fold-flips on|off       global: where the dual solved with folds allowed has faces crossing themselves
-                            (at most 8 % of them), flip an edge of each one's star and solve again: fewer
-                            faces cut later, each cut making two nodes of four faces (default on)
+                            (at most 8 % of them), merge each one's vertex with its neighbour along the
+                            flatter principal direction (else flip an edge of its star) and solve again:
+                            fewer faces cut later, each cut making two nodes of four faces (default on)
   --field SPEC              direction field: principal (default; under --method auto the surface's
                             recommended field; on a dome whose curvature lines turn around an umbilic,
                             section), angle:DEG, param, radial, diverging[:DEG], spiral[:DEG],

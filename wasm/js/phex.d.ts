@@ -354,10 +354,10 @@ export interface RunParams {
   clipBoundary?: 'on' | 'off';
   /**
    * Method 'global': where the dual, solved with folds allowed, has faces crossing themselves (next to parabolic
-   * curves; at most 8 % of the faces, so not on a coarse or noisy upload), an edge of each such face's star is
-   * flipped and the solve run again, twice at most ('on', default): fewer faces cut later, each cut making two
-   * nodes of four faces (on analytic surfaces at a point or two of hexagons and some time). 'off': the
-   * triangulation as the field gives it.
+   * curves; at most 8 % of the faces, so not on a coarse or noisy upload), each such face's vertex is merged
+   * with its neighbour along the flatter principal direction (else an edge of its star is flipped) and the solve
+   * run again, three rounds at most ('on', default): fewer faces cut later, each cut making two nodes of four
+   * faces (on analytic surfaces at a point or two of hexagons). 'off': the triangulation as the field gives it.
    */
   foldFlips?: 'on' | 'off';
   /**

@@ -94,10 +94,11 @@ struct PipelineParams {
   double alignment = 1.0;
   double curvatureSizing = 0.0;
   // The global method's triangulation: where its dual, solved with folds allowed, has faces crossing themselves
-  // (at most 8 % of them: not on a coarse or noisy upload), an edge of each such face's star flipped and the
-  // solve run again, twice at most: fewer faces cut later (each cut makes two nodes of four faces). On the
-  // uploaded bumps at 3000-20000 faces 64-86 % fewer cuts, more hexagons, -15 to +14 % time; on analytic surfaces
-  // laid by the global method fewer cuts too, but 0.5-2 points fewer hexagons and 15-30 % more time (METHOD.md).
+  // (at most 8 % of them: not on a coarse or noisy upload), each such face's vertex merged with its neighbour
+  // along the flatter principal direction (or, where that cannot be done, an edge of its star flipped) and the
+  // solve run again, three rounds at most: fewer faces cut later (each cut makes two nodes of four faces). On the
+  // uploaded bumps at 3000-20000 faces 80-83 % fewer cuts, as many hexagons or more, 2-6 % fewer faces; on the
+  // torus and the analytic bumps laid globally 23-88 % fewer cuts, a point or two of hexagons less (METHOD.md).
   bool foldFlips = true;
 };
 
