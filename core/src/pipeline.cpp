@@ -801,25 +801,21 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     auto key = [nv](int a, int b) { return std::uint64_t(std::min(a, b)) * std::uint64_t(nv) + std::uint64_t(std::max(a, b)); };
     std::unordered_map<std::uint64_t, std::vector<int>> edgeTriangles;
     std::vector<int> triangles(nv, 0);
-    std::vector<std::vector<int>> star(nv), ring(nv);  // each vertex's triangles, and its neighbours (sorted)
+    // Each vertex's triangles (`closed`: an interior vertex), and its neighbours, sorted.
+    const VertexRings rings = vertexRings(T);
+    const std::vector<std::vector<int>>& star = rings.triangles;
+    std::vector<std::vector<int>> ring(nv);
     for (int f = 0; f < nf; ++f)
       for (int k = 0; k < 3; ++k) {
         const int a = T.F(f, k), b = T.F(f, (k + 1) % 3);
         edgeTriangles[key(a, b)].push_back(f), ++triangles[a];
-        star[a].push_back(f), ring[a].push_back(b), ring[b].push_back(a);
+        ring[a].push_back(b), ring[b].push_back(a);
       }
     for (std::vector<int>& r : ring) {
       std::sort(r.begin(), r.end());
       r.erase(std::unique(r.begin(), r.end()), r.end());
     }
-    // Interior: every edge at the vertex has two triangles.
-    auto interior = [&](int v) {
-      for (int u : ring[v]) {
-        const auto it = edgeTriangles.find(key(u, v));
-        if (it == edgeTriangles.end() || it->second.size() != 2) return false;
-      }
-      return !ring[v].empty();
-    };
+    auto interior = [&](int v) { return rings.closed[v] && !star[v].empty(); };
     auto point = [&](int v) { return Vec3(T.V.row(v).transpose()); };
     auto centroid = [&](int f) { return Vec3((point(T.F(f, 0)) + point(T.F(f, 1)) + point(T.F(f, 2))) / 3); };
     std::vector<char> usedTriangle(nf, 0), usedVertex(nv, 0), dropped(nf, 0);
@@ -847,9 +843,10 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
         if (usedTriangle[f]) return false;
       for (int f : star[w])
         if (usedTriangle[f]) return false;
-      const Vec3 merged = surface.closestPoint(0.5 * (point(v) + point(w))).point;
+      const LocalGeometry middle = surface.closestPoint(0.5 * (point(v) + point(w)));
+      const Vec3& merged = middle.point;
       // No triangle left around the merged vertex turns over (seen along the normal there).
-      const Vec3 normal = surface.closestPoint(merged).normal;
+      const Vec3& normal = middle.normal;
       for (int x : {v, w})
         for (int f : star[x]) {
           Vec3 c[3];
@@ -1869,23 +1866,18 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   if (params.clipBoundary && !surface.isClosed()) {  // (closed: no boundary curve)
     report("clip", 0, "clipping the boundary panels to the boundary curve");
     const PolyMesh unclipped = r.hex;
-    auto worstPlanarity = [](const PolyMesh& m) {
-      double worst = 0;
-      for (int f = 0; f < m.faceCount(); ++f) worst = std::max(worst, facePlanarity(m, f));
-      return worst;
-    };
     r.boundaryClip = clipBoundaryPanels(r.hex, surface);
     // A node moved along its edge onto the curve carries the planarity the solve left its two panels (up to the
     // tolerance) to the shorter clipped edges: on a rough saddle at 1500 faces one face went from 7.9e-10 to
     // 1.1e-9. Such a mesh is settled by a few sweeps of the solver without the closeness term, else left unclipped.
-    if (r.solve.converged && worstPlanarity(r.hex) > params.tolerance) {
+    if (r.solve.converged && maxPlanarity(r.hex) > params.tolerance) {
       PlanarizeOptions settle = po;
       settle.method = PlanarizeMethod::LocalGlobal;
       settle.lambda = settle.mu = 0;
       settle.maxIterations = 10;
       settle.fitSurface = false;
       planarize(r.hex, settle, {}, cancel);
-      if (worstPlanarity(r.hex) > params.tolerance) {
+      if (maxPlanarity(r.hex) > params.tolerance) {
         r.hex = unclipped;
         r.boundaryClip = BoundaryClip{};
         r.triangulation.notes.push_back("the boundary panels were not clipped to the boundary curve: clipped, a panel "

@@ -104,11 +104,6 @@ class SurfaceDistance final : public ceres::SizedCostFunction<1, 3> {
   const double* w_;
 };
 
-double maxPlanarity(const PolyMesh& mesh) {
-  double m = 0;
-  for (int f = 0; f < mesh.faceCount(); ++f) m = std::max(m, facePlanarity(mesh, f));
-  return m;
-}
 
 class RoundCallback final : public ceres::IterationCallback {
  public:
@@ -1172,6 +1167,12 @@ void fitPlanarMeshToSurface(PolyMesh& mesh, const PlanarizeOptions& options, Pla
       report.surfaceDistanceAfter = after / diagonal;
     }
   }
+}
+
+double maxPlanarity(const PolyMesh& mesh) {
+  double m = 0;
+  for (int f = 0; f < mesh.faceCount(); ++f) m = std::max(m, facePlanarity(mesh, f));
+  return m;
 }
 
 PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const ProgressFn& progress,

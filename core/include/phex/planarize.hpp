@@ -90,6 +90,9 @@ struct PlanarizeReport {
 PlanarizeReport planarize(PolyMesh& mesh, const PlanarizeOptions& options, const ProgressFn& progress = {},
                           const CancelFlag* cancel = nullptr);
 
+// The largest planarity over the faces of `mesh` (facePlanarity, relative to each face's edge length).
+double maxPlanarity(const PolyMesh& mesh);
+
 // The surface fit of PlanarizeOptions::fitSurface alone (whatever that flag says), on a mesh the solve left planar
 // to the tolerance (report.converged; else nothing is done): the face planes shifted towards the surface, then
 // the free and boundary nodes placed; fills the report's surface fields. planarize() ends with it.
