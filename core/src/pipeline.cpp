@@ -762,6 +762,7 @@ constexpr std::size_t kMergedMost = 8;
 // triangulation kept.
 struct FoldFlips {
   int collapses = 0, flips = 0;
+  int folded = -1;  // interior faces crossing themselves in the kept triangulation's dual solved with folds allowed
   RepairResult repair;  // the repairs after the changes kept (moves, and edges flipped where moves did not do)
 };
 FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const PipelineParams& params, const ProgressFn& progress,
@@ -789,10 +790,12 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
       if (!dual.boundaryFace[f] && hex.faceSize(f) >= 4 && faceSelfIntersects(hex, f)) folded.push_back(f);
     if (round == 0 && folded.size() > kFoldFlipShare * double(dual.mesh.faceCount())) {
       keptDual = std::move(dual);  // of `best`, which is `t` as it came
+      kept.folded = static_cast<int>(folded.size());
       break;
     }
     if (folded.size() > 0.9 * double(bestFolds)) break;  // gained less than a tenth: the round before stands
     best = t, bestFolds = folded.size(), kept = done;
+    kept.folded = static_cast<int>(folded.size());
     keptDual = std::move(dual);
     if (folded.empty() || round == kFoldRounds) break;
     const DualMesh& d = *keptDual;
@@ -1050,12 +1053,16 @@ std::string uploadNote(const Surface* surface) {
 
 // `dupinDual`, where given, gets the Dupin dual of the triangulation where the stage built it on the way (the
 // global method's fold flips solve it), so that runPipeline need not build it again.
+struct StageDual {
+  std::optional<DualMesh> dual;  // the Dupin dual of the triangulation, where the stage built it
+  int folded = -1;  // its interior faces crossing themselves once solved with folds allowed (-1: not solved)
+};
 TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel,
-                                 SurfacePtr& made, Vec3& origin, std::optional<DualMesh>* dupinDual);
+                                 SurfacePtr& made, Vec3& origin, StageDual* dupinDual);
 
 // triangulate in the upload's local frame (stage.origin), for runPipeline to go on in it.
 TriangulationStage triangulateLocal(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel,
-                                    std::optional<DualMesh>* dupinDual = nullptr) {
+                                    StageDual* dupinDual = nullptr) {
   SurfacePtr surface;
   Vec3 origin = Vec3::Zero();
   try {
@@ -1078,7 +1085,7 @@ TriangulationStage triangulate(const PipelineParams& given, const ProgressFn& pr
 namespace {
 
 TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& progress, const CancelFlag* cancel,
-                                 SurfacePtr& made, Vec3& origin, std::optional<DualMesh>* dupinDual) {
+                                 SurfacePtr& made, Vec3& origin, StageDual* dupinDual) {
   validate(given);
   PipelineParams params = given;
   params.method = resolveMethod(given);
@@ -1411,8 +1418,8 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
   }
   if (params.method == TriangulationMethod::Global && !checked && params.foldFlips) {
     std::optional<DualMesh> dual;
-    if (const FoldFlips f = flipFoldsAway(t.triangulation, *t.surface, params, progress, cancel, dual);
-        f.flips > 0 || f.collapses > 0) {
+    const FoldFlips f = flipFoldsAway(t.triangulation, *t.surface, params, progress, cancel, dual);
+    if (f.flips > 0 || f.collapses > 0) {
       std::string note = "where the dual, solved with folds allowed, had faces crossing themselves (each such face would "
                          "otherwise be cut, making two nodes of four faces), " + std::to_string(f.collapses) +
                          " vertices were merged with their neighbour along the flatter principal direction and " +
@@ -1421,7 +1428,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       if (f.repair.flips > 0) note += " and flipping " + std::to_string(f.repair.flips) + " edges more";
       t.triangulation.notes.push_back(note);
     }
-    if (dupinDual) *dupinDual = std::move(dual);
+    if (dupinDual) dupinDual->dual = std::move(dual), dupinDual->folded = f.folded;
   }
   t.check = checked ? std::move(*checked) : checkTriangulation(t.triangulation, *t.surface);
   // A lay that covers next to nothing is no result to hand on (a hill laid from a tiny loop around its top:
@@ -1660,7 +1667,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   };
 
   report("triangulate", 0, "laying the triangulation");
-  std::optional<DualMesh> stageDual;  // the Dupin dual, where the triangulation stage built it
+  StageDual stageDual;  // the Dupin dual, where the triangulation stage built it
   TriangulationStage stage = triangulateLocal(params, progress, cancel, &stageDual);
   r.method = stage.method;
   r.field = stage.field;
@@ -1681,7 +1688,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     report("dualize", 0, std::string(dualityName(duality)) + " duality");
     // The stage's Dupin dual serves once (a second Dupin solve, rare, builds it again rather than keep it).
     std::optional<DualMesh> taken;
-    if (duality == Duality::Dupin) taken.swap(stageDual);
+    if (duality == Duality::Dupin) taken.swap(stageDual.dual);
     DualMesh dual = duality == Duality::Tangent ? tangentDual(r.triangulation, surface)
                     : taken                       ? std::move(*taken)
                                                   : dupinDual(r.triangulation, surface);
@@ -1843,6 +1850,9 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     }
   }
 
+  // Cuts of a converged guarded solve against its dual's folds that send the global method's triangulation to an
+  // unguarded solve as well (below), and how much farther from the surface the unguarded one may then end.
+  constexpr double kManyCutsRatio = 1.5, kManyCutsMore = 5, kFewerCutsFarther = 1.6;
   // A guarded solve that stalled may reach the tolerance unguarded with no face left crossing itself: the
   // guard refuses every step that would make a simple face cross itself, also where the faces only pass
   // through such a shape on their way to planar ones. Method 1 on a cyclide patch past its parabolic circles
@@ -1851,13 +1861,28 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // (every one that folded) stay within one in kSeamShare (`foldsAllowed`); else the guarded result stands,
   // and says that it missed: Method 1 forced onto a cone cut 1865 of 697, and the torus laid across its
   // parabolic circles (Fig. 19's infeasible direction) 143 of 925. Ceres solvers have no guard.
-  if (!r.solve.converged && params.preventFolds && params.solver == PlanarizeMethod::LocalGlobal) {
+  //
+  // So also where the global method's guarded solve converged only by cutting many more interior faces than its
+  // dual folds when solved unguarded (the fold rounds measured that: `stageDual.folded`): the guard stalled and
+  // every face still off planar was cut, round after round, where the unguarded solve cuts the folded faces alone
+  // (the botanic-garden bubble at 5000 faces, alignment 1.001: 121 interior faces cut guarded, 26 unguarded, 87.8 ->
+  // 90.9 % hexagons, its farthest node 0.06 -> 0.19 % of the diagonal off). Kept where it cuts fewer and its farthest
+  // node stays within the distance goal or the guarded one's distance, or within kFewerCutsFarther of that where it
+  // cuts half as many or fewer (each cut face makes two nodes of four faces; the bumps upload at 5000 faces,
+  // anisotropy 1.498: 111 -> 44 cut, 0.08 -> 0.27 %). The bubble at 3000 faces (anisotropy 1.499) is not: 8 cuts
+  // against 77, but its nodes drift 2.2 % of the diagonal off.
+  const bool manyCuts = r.solve.converged && r.method == TriangulationMethod::Global && stageDual.folded >= 0 &&
+                        r.interiorFacesSplit > kManyCutsRatio * stageDual.folded + kManyCutsMore;
+  if ((!r.solve.converged || manyCuts) && params.preventFolds && params.solver == PlanarizeMethod::LocalGlobal) {
     po.preventFolds = false;
     PipelineResult t;
     solveFrom(t, asked, dualOf(asked));
     po.preventFolds = true;
     if (t.solve.converged && crossing(t.hex) == 0 &&
-        static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare) {
+        static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare &&
+        (!manyCuts || (t.interiorFacesSplit < r.interiorFacesSplit &&
+                       offSurface(t) <= std::max(kSurfaceDistanceGoal, offSurface(r)) *
+                                            (2 * t.interiorFacesSplit <= r.interiorFacesSplit ? kFewerCutsFarther : 1.0)))) {
       takeSolve(std::move(t));
       r.foldsAllowed = true;
     }
