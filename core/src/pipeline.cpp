@@ -1853,6 +1853,8 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // Cuts of a converged guarded solve against its dual's folds that send the global method's triangulation to an
   // unguarded solve as well (below), and how much farther from the surface the unguarded one may then end.
   constexpr double kManyCutsRatio = 1.5, kManyCutsMore = 5, kFewerCutsFarther = 1.6;
+  // Nodes of the unguarded solve farther off than this share of the distance goal are put back on the surface.
+  constexpr double kPulledBack = 0.5;
   // A guarded solve that stalled may reach the tolerance unguarded with no face left crossing itself: the
   // guard refuses every step that would make a simple face cross itself, also where the faces only pass
   // through such a shape on their way to planar ones. Method 1 on a cyclide patch past its parabolic circles
@@ -1869,8 +1871,9 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // 90.9 % hexagons, its farthest node 0.06 -> 0.19 % of the diagonal off). Kept where it cuts fewer and its farthest
   // node stays within the distance goal or the guarded one's distance, or within kFewerCutsFarther of that where it
   // cuts half as many or fewer (each cut face makes two nodes of four faces; the bumps upload at 5000 faces,
-  // anisotropy 1.498: 111 -> 44 cut, 0.08 -> 0.27 %). The bubble at 3000 faces (anisotropy 1.499) is not: 8 cuts
-  // against 77, but its nodes drift 2.2 % of the diagonal off.
+  // anisotropy 1.498: 111 -> 44 cut, 0.08 -> 0.27 %). The bubble at 3000 faces (anisotropy 1.499) cut 8 against 77,
+  // but two nodes ended 2.2 % of the diagonal off; with the four nodes past half the goal put back on the surface
+  // and solved again it converges with the same 8 cuts, 0.08 % off (the bumps upload above then 0.09 %).
   const bool manyCuts = r.solve.converged && r.method == TriangulationMethod::Global && stageDual.folded >= 0 &&
                         r.interiorFacesSplit > kManyCutsRatio * stageDual.folded + kManyCutsMore;
   if ((!r.solve.converged || manyCuts) && params.preventFolds && params.solver == PlanarizeMethod::LocalGlobal) {
@@ -1878,6 +1881,26 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     PipelineResult t;
     solveFrom(t, asked, dualOf(asked));
     po.preventFolds = true;
+    // Where it cuts fewer but ends farther off, its far nodes (three planes through nearly one line, which the
+    // surface fit cannot move) are put back on the surface and the mesh solved again from there, guarded.
+    if (manyCuts && t.solve.converged && crossing(t.hex) == 0 && t.interiorFacesSplit < r.interiorFacesSplit &&
+        offSurface(t) > std::max(kSurfaceDistanceGoal, offSurface(r))) {
+      PolyMesh pulled = t.hex;
+      for (int v = 0; v < pulled.V.rows(); ++v) {
+        const Vec3 x = pulled.V.row(v).transpose();
+        const LocalGeometry g = surface.closestPoint(x);
+        if ((g.point - x).norm() > kPulledBack * kSurfaceDistanceGoal * diagonal) pulled.V.row(v) = g.point.transpose();
+      }
+      PlanarizeOptions o = po;
+      o.fitSurface = false;
+      PlanarizeReport again = planarize(pulled, o, progress, cancel);
+      if (again.converged) fitPlanarMeshToSurface(pulled, po, again, progress, cancel);
+      if (again.converged && crossing(pulled) == 0 && again.surfaceDistanceAfter < offSurface(t)) {
+        again.iterations += t.solve.iterations;
+        t.hex = std::move(pulled);
+        t.solve = std::move(again);
+      }
+    }
     if (t.solve.converged && crossing(t.hex) == 0 &&
         static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare &&
         (!manyCuts || (t.interiorFacesSplit < r.interiorFacesSplit &&
