@@ -206,6 +206,7 @@ val resultToJs(const phex::PipelineResult& r) {
   metrics.set("edgeLengthMin", m.edgeLengthMin);
   metrics.set("edgeLengthMax", m.edgeLengthMax);
   metrics.set("edgeLengthMean", m.edgeLengthMean);
+  metrics.set("shortEdgeCount", m.shortEdgeCount);
   metrics.set("faceAreaMin", m.faceAreaMin);
   metrics.set("faceAreaMax", m.faceAreaMax);
   metrics.set("faceAreaMean", m.faceAreaMean);

@@ -422,6 +422,7 @@ function showStats({ metrics, solve, timings, method, field, triangulation, dual
     ? `${fmt(metrics.planarityDiagonals.reduce((a, b) => Math.max(a, b), 0))} % max`
     : '–';
   showSpread('edge-length', metrics.edgeLengthMin, metrics.edgeLengthMean, metrics.edgeLengthMax);
+  if (metrics.shortEdgeCount) $('edge-length').textContent += `, ${metrics.shortEdgeCount} under 1 % of the mean`;
   showSpread('face-area', metrics.faceAreaMin, metrics.faceAreaMean, metrics.faceAreaMax);
   $('invalid-faces').textContent = String(metrics.selfIntersectingCount);
   $('convexity-mismatch').textContent =

@@ -339,6 +339,17 @@ MeshMetrics measureAll(const PolyMesh& mesh, const Surface* surface) {
   for (int c : facesAtVertex) m.vertexValence[c]++;
   m.planarityMean = m.faceCount ? sum / m.faceCount : 0.0;
   m.edgeLengthMean = edges ? edgeSum / edges : 0.0;
+  {
+    std::vector<std::pair<int, int>> shortEdges;  // an interior edge is seen from both its faces
+    for (int f = 0; f < m.faceCount; ++f)
+      for (int i = 0; i < mesh.faceSize(f); ++i) {
+        const int a = mesh.face(f)[i], b = mesh.face(f)[(i + 1) % mesh.faceSize(f)];
+        if ((mesh.vertex(a) - mesh.vertex(b)).norm() < kShortEdge * m.edgeLengthMean)
+          shortEdges.emplace_back(std::min(a, b), std::max(a, b));
+      }
+    std::sort(shortEdges.begin(), shortEdges.end());
+    m.shortEdgeCount = static_cast<int>(std::unique(shortEdges.begin(), shortEdges.end()) - shortEdges.begin());
+  }
   m.faceAreaMean = m.faceCount ? areaSum / m.faceCount : 0.0;
   m.regularityMean = regularityCount ? regularitySum / regularityCount : 0.0;
   if (!edges) m.edgeLengthMin = 0;

@@ -37,6 +37,23 @@ TEST_CASE("metrics: self-intersection is detected") {
   CHECK(mm.facesBySize.at(6) == 1);
 }
 
+// Two regular hexagons sharing the edge 5-0; vertex 0 moved nearly onto vertex 5 leaves one short edge, counted
+// once though both faces have it.
+TEST_CASE("metrics: edges far shorter than the mean are counted once each") {
+  PolyMesh m;
+  m.V.resize(10, 3);
+  const double s = std::sqrt(3.0) / 2;
+  m.V << 1, 0, 0, 0.5, s, 0, -0.5, s, 0, -1, 0, 0, -0.5, -s, 0, 0.5, -s, 0,  // around the origin
+      2.5, -s, 0, 2, 0, 0, 1, -2 * s, 0, 2, -2 * s, 0;                        // with 0 and 5, around (1.5, -s)
+  m.addFace({0, 1, 2, 3, 4, 5});
+  m.addFace({6, 7, 0, 5, 8, 9});
+  CHECK(measure(m).shortEdgeCount == 0);
+  m.V.row(0) = m.V.row(5) + 0.002 * (m.V.row(0) - m.V.row(5));
+  const MeshMetrics mm = measure(m);
+  CHECK(mm.shortEdgeCount == 1);
+  CHECK(mm.edgeLengthMin < kShortEdge * mm.edgeLengthMean);
+}
+
 TEST_CASE("metrics: the fold margin bounds how far one corner may move before the face crosses itself") {
   // Regular hexagon of edge 1: the edges nearest a corner not at it start at its neighbours, one edge away.
   CHECK(faceFoldMargin(hexagon(0, false), 0, Vec3::UnitZ()) == Approx(1.0));

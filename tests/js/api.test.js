@@ -41,6 +41,18 @@ test('the default torus is a planar, valid, hexagon mesh', () => {
   assert.equal(metrics.planarity.length, metrics.faceCount);
   assert.equal(metrics.selfIntersecting.length, metrics.faceCount);
   assert.equal(Math.max(...metrics.planarity), metrics.planarityMax);
+  // Edges under 1 % of the mean edge (over the faces' sides), each once, as counted from the mesh itself.
+  const sides = [];
+  for (let f = 0; f < metrics.faceCount; ++f)
+    for (let k = hex.faceOffsets[f]; k < hex.faceOffsets[f + 1]; ++k) {
+      const a = hex.faceIndices[k], b = hex.faceIndices[k + 1 < hex.faceOffsets[f + 1] ? k + 1 : hex.faceOffsets[f]];
+      const d = [0, 1, 2].map((i) => hex.positions[3 * a + i] - hex.positions[3 * b + i]);
+      sides.push([Math.min(a, b), Math.max(a, b), Math.hypot(...d)]);
+    }
+  const mean = sides.reduce((sum, [, , l]) => sum + l, 0) / sides.length;
+  assert.ok(Math.abs(mean - metrics.edgeLengthMean) <= 1e-9 * mean);
+  const short = new Set(sides.filter(([, , l]) => l < 0.01 * mean).map(([a, b]) => `${a},${b}`));
+  assert.equal(metrics.shortEdgeCount, short.size);
   assert.equal(torus.triangulation.triangles.length % 3, 0);
   assert.equal(torus.initial.faceOffsets.length, metrics.faceCount + 1);
   for (const stage of ['triangulate', 'dualize', 'planarize', 'measure', 'total']) assert.ok(timings[stage] >= 0, stage);
@@ -494,6 +506,8 @@ test('the bumps are laid in several systems of rows and say so', async () => {
   // Faces the seams leave that only folding would make planar are cut: the mesh reaches the tolerance.
   assert.ok(r.solve.converged, String(r.metrics.planarityMax));
   assert.ok(r.solve.interiorFacesSplit > 8, String(r.solve.interiorFacesSplit));
+  // Next to the parabolic rings planar hexagons tend to quads: some edges nearly vanish, and the metrics say how many.
+  assert.ok(r.metrics.shortEdgeCount > 0 && r.metrics.shortEdgeCount < 0.05 * r.metrics.faceCount, String(r.metrics.shortEdgeCount));
   const roof = await phex.run({ surface: 'wave-roof', faces: 1000 });
   assert.equal(roof.triangulation.systems, 1);
   assert.equal(typeof roof.dualUntangled, 'number');

@@ -142,6 +142,11 @@ export interface Metrics {
   edgeLengthMin?: number;
   edgeLengthMax?: number;
   edgeLengthMean?: number;
+  /**
+   * Edges shorter than 1 % of the mean edge, each counted once: their two nodes nearly coincide, so four panels
+   * meet there in effect (next to parabolic curves a planar hexagon tends to a quad).
+   */
+  shortEdgeCount?: number;
   faceAreaMin?: number;
   faceAreaMax?: number;
   faceAreaMean?: number;

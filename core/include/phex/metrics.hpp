@@ -49,6 +49,9 @@ double facePlanarityDiagonals(const PolyMesh& mesh, int face);
 // (0 for an exact affine copy). `corners` are in the face's plane, counterclockwise.
 double affineRegularityDefect(const std::vector<Vec2>& corners, bool quasiRegular);
 
+// An edge shorter than this share of the mean edge counts as short (MeshMetrics::shortEdgeCount).
+inline constexpr double kShortEdge = 0.01;
+
 struct MeshMetrics {
   std::vector<double> planarity;          // #faces
   std::vector<double> planarityDiagonals; // #faces, libhedra's measure in percent
@@ -62,6 +65,9 @@ struct MeshMetrics {
   double planarityMean = 0.0;
   int selfIntersectingCount = 0;
   double edgeLengthMin = 0, edgeLengthMax = 0, edgeLengthMean = 0;
+  // Edges shorter than kShortEdge of the mean edge, each once: their two nodes nearly coincide, so where they
+  // meet four panels meet in effect (next to parabolic curves a planar hexagon tends to a quad, §3).
+  int shortEdgeCount = 0;
   double faceAreaMin = 0, faceAreaMax = 0, faceAreaMean = 0;
   std::map<int, int> vertexValence;      // number of faces at a vertex -> count (3 inside a P-Hex mesh)
   // Filled by measure(mesh, surface), from the Gaussian curvature at each face's centre:
