@@ -546,3 +546,20 @@ TEST_CASE("pipeline: far nodes of the unguarded solve are put back on the surfac
   CHECK(r.metrics.selfIntersectingCount == 0);
   CHECK(r.solve.surfaceDistanceAfter <= 0.002);
 }
+
+// A converged mesh can keep a few nodes far off where three planes pass through nearly one line: the bubble at
+// 1000 faces ended 0.42 % of the diagonal off (the goal 0.2 %). Put back on the surface and solved again, 0.10 %.
+TEST_CASE("pipeline: a converged global mesh with nodes past the distance goal has them put back and solved again") {
+  PipelineParams p;
+  p.mesh = upload("directional_botanic-garden-bubble.off");
+  p.method = TriangulationMethod::Global;
+  p.faces = 1000;
+  const PipelineResult r = runPipeline(p);
+  INFO("cut " << r.interiorFacesSplit << ", farthest node " << r.solve.surfaceDistanceAfter);
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+  CHECK(r.solve.surfaceDistanceAfter <= 0.002);
+  CHECK(r.metrics.surfaceDistanceMax <= 0.002);
+  CHECK(r.interiorFacesSplit <= 10);
+}
