@@ -1857,6 +1857,25 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // at most this many more interior faces cut.
   constexpr double kPulledBack = 0.5;
   constexpr int kPutBackCuts = 5;
+  // x's nodes farther off than kPulledBack of the distance goal put back on the surface (their closest points), and
+  // the mesh solved again from there as from a dual (guarded, cutting what stays off planar, fitted); the cuts,
+  // iterations and the dual as laid carried over from x.
+  auto putBack = [&](const PipelineResult& x) {
+    DualMesh from = x.dual;  // its faces as cut
+    from.mesh = x.hex;
+    for (int v = 0; v < from.mesh.V.rows(); ++v) {
+      const Vec3 p = from.mesh.V.row(v).transpose();
+      const LocalGeometry g = surface.closestPoint(p);
+      if ((g.point - p).norm() > kPulledBack * kSurfaceDistanceGoal * diagonal) from.mesh.V.row(v) = g.point.transpose();
+    }
+    PipelineResult again;
+    solveFrom(again, x.duality, std::move(from));
+    again.interiorFacesSplit += x.interiorFacesSplit;
+    again.boundaryPanelsSplit += x.boundaryPanelsSplit;
+    again.solve.iterations += x.solve.iterations;
+    again.initial.V = x.initial.V;  // the dual as laid, not the mesh put back (cuts add no vertex)
+    return again;
+  };
   // A guarded solve that stalled may reach the tolerance unguarded with no face left crossing itself: the
   // guard refuses every step that would make a simple face cross itself, also where the faces only pass
   // through such a shape on their way to planar ones. Method 1 on a cyclide patch past its parabolic circles
@@ -1879,25 +1898,6 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // 0.08 % off (the bumps upload above then 0.09 %; the bubble at 5000 faces, anisotropy 1.503, 135 -> 29 cuts,
   // 87.1 -> 90.5 % hexagons, 0.05 % off, where the solve from the far nodes put back cut 7 more). On seven
   // orderings of the 40-run sweep, interior faces cut in the converged runs 1943 -> 1502 with both, none more.
-  // x's nodes farther off than kPulledBack of the distance goal put back on the surface (their closest points), and
-  // the mesh solved again from there as from a dual (guarded, cutting what stays off planar, fitted); the cuts,
-  // iterations and the dual as laid carried over from x.
-  auto putBack = [&](const PipelineResult& x) {
-    DualMesh from = x.dual;  // its faces as cut
-    from.mesh = x.hex;
-    for (int v = 0; v < from.mesh.V.rows(); ++v) {
-      const Vec3 p = from.mesh.V.row(v).transpose();
-      const LocalGeometry g = surface.closestPoint(p);
-      if ((g.point - p).norm() > kPulledBack * kSurfaceDistanceGoal * diagonal) from.mesh.V.row(v) = g.point.transpose();
-    }
-    PipelineResult again;
-    solveFrom(again, x.duality, std::move(from));
-    again.interiorFacesSplit += x.interiorFacesSplit;
-    again.boundaryPanelsSplit += x.boundaryPanelsSplit;
-    again.solve.iterations += x.solve.iterations;
-    again.initial.V = x.initial.V;  // the dual as laid, not the mesh put back (cuts add no vertex)
-    return again;
-  };
   const bool manyCuts = r.solve.converged && r.method == TriangulationMethod::Global && stageDual.folded >= 0 &&
                         r.interiorFacesSplit > kManyCutsRatio * stageDual.folded + kManyCutsMore;
   if ((!r.solve.converged || manyCuts) && params.preventFolds && params.solver == PlanarizeMethod::LocalGlobal) {
@@ -1905,18 +1905,24 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     PipelineResult t;
     solveFrom(t, asked, dualOf(asked));
     po.preventFolds = true;
-    // Where it cuts fewer but ends farther off, its far nodes (three planes through nearly one line, which the
-    // surface fit cannot move) are put back on the surface and the mesh solved again from there, guarded.
-    if (manyCuts && t.solve.converged && crossing(t.hex) == 0 && t.interiorFacesSplit < r.interiorFacesSplit &&
-        offSurface(t) > std::max(kSurfaceDistanceGoal, offSurface(r))) {
-      PipelineResult again = putBack(t);
-      if (again.solve.converged && crossing(again.hex) == 0 && offSurface(again) < offSurface(t)) t = std::move(again);
+    bool keep = t.solve.converged && crossing(t.hex) == 0;
+    if (keep && manyCuts) {
+      keep = t.interiorFacesSplit < r.interiorFacesSplit;
+      const double goal = std::max(kSurfaceDistanceGoal, offSurface(r));
+      double off = keep ? offSurface(t) : 0.0;
+      // Where it cuts fewer but ends farther off, its far nodes (three planes through nearly one line, which the
+      // surface fit cannot move) are put back on the surface and the mesh solved again from there, guarded.
+      if (keep && off > goal) {
+        PipelineResult again = putBack(t);
+        if (again.solve.converged && crossing(again.hex) == 0) {
+          const double nearer = offSurface(again);
+          if (nearer < off) t = std::move(again), off = nearer;
+        }
+      }
+      keep = keep && t.interiorFacesSplit < r.interiorFacesSplit &&
+             off <= goal * (2 * t.interiorFacesSplit <= r.interiorFacesSplit ? kFewerCutsFarther : 1.0);
     }
-    if (t.solve.converged && crossing(t.hex) == 0 &&
-        static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare &&
-        (!manyCuts || (t.interiorFacesSplit < r.interiorFacesSplit &&
-                       offSurface(t) <= std::max(kSurfaceDistanceGoal, offSurface(r)) *
-                                            (2 * t.interiorFacesSplit <= r.interiorFacesSplit ? kFewerCutsFarther : 1.0)))) {
+    if (keep && static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare) {
       takeSolve(std::move(t));
       r.foldsAllowed = true;
     }
@@ -1929,12 +1935,13 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // seven orderings of the 40-run sweep the converged runs past the goal went 13 -> 0 for 13 more interior faces
   // cut (1502 -> 1515); the bubble at 1000 and 2000 faces 0.42 -> 0.10 % and 0.51 -> 0.07 % of the diagonal (0 and
   // 1 more cut), the bumps upload at 1000 and 5000 0.22 -> 0.15 % and 0.25 -> 0.07 % (1 and 0).
-  if (r.solve.converged && r.method == TriangulationMethod::Global && offSurface(r) > kSurfaceDistanceGoal &&
-      crossing(r.hex) == 0) {
-    PipelineResult again = putBack(r);
-    if (again.solve.converged && crossing(again.hex) == 0 && offSurface(again) < offSurface(r) &&
-        again.interiorFacesSplit <= r.interiorFacesSplit + kPutBackCuts + static_cast<int>(facesBeforeCuts(r) / 1000)) {
-      takeSolve(std::move(again));
+  if (r.solve.converged && r.method == TriangulationMethod::Global) {
+    const double off = offSurface(r);
+    if (off > kSurfaceDistanceGoal && crossing(r.hex) == 0) {
+      PipelineResult again = putBack(r);
+      if (again.solve.converged && crossing(again.hex) == 0 && offSurface(again) < off &&
+          again.interiorFacesSplit <= r.interiorFacesSplit + kPutBackCuts + static_cast<int>(facesBeforeCuts(r) / 1000))
+        takeSolve(std::move(again));
     }
   }
 
