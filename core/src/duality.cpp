@@ -380,6 +380,23 @@ void keepWithinBoundary(const TriMesh& T, const VertexRings& rings, const std::v
 // (0 solver iterations from 1000 to 10000 faces), where the local solver stalled at 1e-5 to 1e-3.
 constexpr double kRulingCosine = 0.985;  // about 10 degrees
 constexpr int kMergePasses = 64;
+// A group's points off its shared plane, root mean square, at most this share of the mean edge: else the group is
+// no ruling, and its vertices keep their own planes. On a lattice that runs near the rulings without following
+// them (the global method's on a cone at 3000 faces) the edges along the zero-curvature direction chain into groups
+// that wander across rulings, and the merges of neighbours meeting far off went on until all 2910 vertices shared
+// one plane, their nodes up to 25 mean edges (21.7 % of the diagonal) off the cone. Groups along true rulings lie
+// in their plane to round-off (Method 2 on the cylinder and cone), and a corrugated vault's merged neighbours about
+// an inflection to a few thousandths of an edge.
+constexpr double kSharedPlaneSpread = 0.02;
+// The root mean square distance of `count` points (their sum and sum of p p^T) from the plane through their mean
+// with normal `normal` (any length).
+double spreadOffPlane(int count, const Vec3& sum, const Eigen::Matrix3d& squares, const Vec3& normal) {
+  const double length = normal.norm();
+  if (count < 2 || !(length > 0)) return 0.0;
+  const Vec3 n = normal / length, mean = sum / count;
+  const double meanSquare = n.dot(squares * n) / count - n.dot(mean) * n.dot(mean);
+  return std::sqrt(std::max(0.0, meanSquare));
+}
 int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo, bool rulingsEverywhere) {
   const int nv = static_cast<int>(geo.size());
   const double h = T.meanEdgeLength();
@@ -433,14 +450,17 @@ int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo, bool ru
     }
   std::vector<int> count(nv, 0);
   std::vector<Vec3> sumPoint(nv, Vec3::Zero()), sumNormal(nv, Vec3::Zero());
+  std::vector<Eigen::Matrix3d> sumSquares(nv, Eigen::Matrix3d::Zero());  // sum of p p^T: the spread off a plane
   auto sumUp = [&]() {
     std::fill(count.begin(), count.end(), 0);
     std::fill(sumPoint.begin(), sumPoint.end(), Vec3::Zero());
     std::fill(sumNormal.begin(), sumNormal.end(), Vec3::Zero());
+    std::fill(sumSquares.begin(), sumSquares.end(), Eigen::Matrix3d::Zero());
     for (int v = 0; v < nv; ++v) {
       const int r = find(v);
       ++count[r];
       sumPoint[r] += geo[v].point;
+      sumSquares[r] += geo[v].point * geo[v].point.transpose();
       // Normals oriented alike (a mesh's are, but not necessarily to round-off at a fold).
       sumNormal[r] += geo[v].normal.dot(geo[r].normal) < 0 ? Vec3(-geo[v].normal) : geo[v].normal;
     }
@@ -477,10 +497,14 @@ int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo, bool ru
         const Vec3 c = (geo[T.F(f, 0)].point + geo[T.F(f, 1)].point + geo[T.F(f, 2)].point) / 3;
         double longest = 0;
         for (int i = 0; i < 3; ++i) longest = std::max(longest, (geo[T.F(f, i)].point - geo[T.F(f, (i + 1) % 3)].point).norm());
-        if ((nearestOnPlanes(N, d, c) - c).norm() > 0.75 * longest) {
+        if ((nearestOnPlanes(N, d, c) - c).norm() > 0.75 * longest &&
+            spreadOffPlane(count[ra] + count[rb], sumPoint[ra] + sumPoint[rb], sumSquares[ra] + sumSquares[rb],
+                           sumNormal[rb] + (sumNormal[ra].dot(sumNormal[rb]) < 0 ? Vec3(-sumNormal[ra]) : sumNormal[ra])) <=
+                kSharedPlaneSpread * h) {
           parent[ra] = rb;
           count[rb] += count[ra];
           sumPoint[rb] += sumPoint[ra];
+          sumSquares[rb] += sumSquares[ra];
           sumNormal[rb] += sumNormal[ra].dot(sumNormal[rb]) < 0 ? Vec3(-sumNormal[ra]) : sumNormal[ra];
           ++version[rb];
           merged = true;
@@ -495,6 +519,7 @@ int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo, bool ru
   for (int v = 0; v < nv; ++v) {
     const int r = find(v);
     if (count[r] < 2 || !(sumNormal[r].norm() > 0)) continue;
+    if (spreadOffPlane(count[r], sumPoint[r], sumSquares[r], sumNormal[r]) > kSharedPlaneSpread * h) continue;
     shared += r == v;
     Vec3 n = sumNormal[r].normalized();
     if (n.dot(geo[v].normal) < 0) n = -n;

@@ -2,6 +2,7 @@
 
 #include "phex/duality.hpp"
 #include "phex/error.hpp"
+#include "phex/global_triangulation.hpp"
 #include "phex/metrics.hpp"
 #include "phex/pipeline.hpp"
 #include "phex/surfaces.hpp"
@@ -111,4 +112,23 @@ TEST_CASE("duality: a boundary triangle's dual point beyond its boundary edge is
     // may be); the point is on AB's line now, not past it.
     CHECK(std::abs(in.dot(x - a)) < 1e-9);
   }
+}
+
+TEST_CASE("duality: on a developable, vertices share a ruling's plane only where they lie in it") {
+  // The global method's lattice on a cone runs near its rulings without following them: its edges along the
+  // zero-curvature direction chained into groups that wandered across rulings, the merges of neighbouring groups
+  // whose planes meet far off went on until every vertex shared one plane, and the dual's points lay up to 25
+  // mean edges off the cone (the run exited 2 with a third of the cone bare).
+  const ParametricSurfacePtr s = makeSurface("cone");
+  GlobalOptions o;
+  o.faces = 3000;
+  const Triangulation t = globalTriangulation(*s, o);
+  const DualMesh d = dupinDual(t, *s);
+  const double edge = d.mesh.meanEdgeLength();
+  double farthest = 0;
+  for (int i = 0; i < d.mesh.V.rows(); ++i) {
+    const Vec3 x = d.mesh.V.row(i).transpose();
+    farthest = std::max(farthest, (s->closestPoint(x).point - x).norm());
+  }
+  CHECK(farthest < 0.5 * edge);
 }
