@@ -108,11 +108,11 @@ Eigen::Vector2d meanNormalCurvatures(const ParametricSurface& s) {
   return k / (n * n);
 }
 
-Triangulation rowLattice(const ParametricSurface& surface, double cell);
+Triangulation rowLattice(const ParametricSurface& surface, double cell, bool straightSides);
 
 }  // namespace
 
-Triangulation latticeTriangulation(const ParametricSurface& surface, double cell, LatticeRows rows) {
+Triangulation latticeTriangulation(const ParametricSurface& surface, double cell, LatticeRows rows, bool straightSides) {
   if (!(cell > 0) || !std::isfinite(cell)) throw Error(ErrorCode::InvalidParameter, "cell size must be positive");
   // Auto: rows follow the parameter lines of smaller normal curvature, on a developable its rulings (the
   // only direction its P-Hex faces can be laid along, §3), on a torus its parallels (§7, Fig. 19).
@@ -121,18 +121,18 @@ Triangulation latticeTriangulation(const ParametricSurface& surface, double cell
     rows = k.y() < 0.5 * k.x() ? LatticeRows::V : LatticeRows::U;
   }
   if (rows == LatticeRows::V) {
-    Triangulation t = rowLattice(SwappedSurface(surface), cell);
+    Triangulation t = rowLattice(SwappedSurface(surface), cell, straightSides);
     for (Vec2& uv : t.uv) uv = Vec2(uv.y(), uv.x());
     for (int f = 0; f < t.mesh.F.rows(); ++f) std::swap(t.mesh.F(f, 1), t.mesh.F(f, 2));  // u, v exchanged: flip
     t.notes.push_back("lattice rows along the v parameter lines");
     return t;
   }
-  return rowLattice(surface, cell);
+  return rowLattice(surface, cell, straightSides);
 }
 
 namespace {
 
-Triangulation rowLattice(const ParametricSurface& surface, double cell) {
+Triangulation rowLattice(const ParametricSurface& surface, double cell, bool straightSides) {
   const auto d = surface.domain();
   const Eigen::Vector2d L = meanCurveLengths(surface);
   const double rowStep = cell * std::sqrt(3.0) / 2.0;
@@ -153,7 +153,9 @@ Triangulation rowLattice(const ParametricSurface& surface, double cell) {
     } else if (!shifted) {
       for (int i = 0; i <= nu; ++i) u.push_back(d.u0 + i * du);
     } else {  // half-shifted row: the boundary zigzags, so that every interior vertex keeps valence 6
+      if (straightSides) u.push_back(d.u0);
       for (int i = 0; i < nu; ++i) u.push_back(d.u0 + (i + 0.5) * du);
+      if (straightSides) u.push_back(d.u1);
     }
     for (double x : u) {
       ids[r].push_back(static_cast<int>(t.uv.size()));
@@ -189,16 +191,18 @@ std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface&
 std::vector<char> judgedStars(const TriMesh& T, const VertexRings& rings, const std::vector<LocalGeometry>& geo,
                               double edgeMean) {
   std::vector<char> judged(T.V.rows(), 0);
-  for (int v = 0; v < static_cast<int>(T.V.rows()); ++v) {
-    if (rings.triangles[v].empty() || !rings.closed[v]) continue;
-    const PointType type = classify(geo[v], 1e-6, edgeMean);
-    // A star across a parabolic curve (a neighbour where K has the other sign or vanishes: §6 step 1) has no
-    // single indicatrix to be judged by: the curvature its edges span changes in kind.
-    bool across = type == PointType::Parabolic || type == PointType::Planar;
-    for (int f : rings.triangles[v])
-      for (int k = 0; k < 3 && !across; ++k) across = classify(geo[T.F(f, k)], 1e-6, edgeMean) != type;
-    judged[v] = !across;
-  }
+  parallelRanges(static_cast<int>(T.V.rows()), kPointsPerThread, [&](int begin, int end) {
+    for (int v = begin; v < end; ++v) {
+      if (rings.triangles[v].empty() || !rings.closed[v]) continue;
+      const PointType type = classify(geo[v], 1e-6, edgeMean);
+      // A star across a parabolic curve (a neighbour where K has the other sign or vanishes: §6 step 1) has no
+      // single indicatrix to be judged by: the curvature its edges span changes in kind.
+      bool across = type == PointType::Parabolic || type == PointType::Planar;
+      for (int f : rings.triangles[v])
+        for (int k = 0; k < 3 && !across; ++k) across = classify(geo[T.F(f, k)], 1e-6, edgeMean) != type;
+      judged[v] = !across;
+    }
+  });
   return judged;
 }
 

@@ -159,7 +159,7 @@ TEST_CASE("global triangulation: planar to 1e-9 with every node of three faces a
     CHECK(r.metrics.selfIntersectingCount == 0);
     CHECK(std::abs(double(r.hex.faceCount()) / 800 - 1) <= 0.1);
     // Nodes away from the boundary panels join three faces. (A boundary panel the solve leaves off planar is still
-    // cut in two: the hyperbolic paraboloid's sides, which its rows meet slantwise, have a few.)
+    // cut in two: at 800 faces one at a corner of the hyperbolic paraboloid's square.)
     std::vector<int> faces(r.hex.V.rows(), 0);
     std::vector<char> onPanel(r.hex.V.rows(), 0);
     for (int f = 0; f < r.hex.faceCount(); ++f)
@@ -181,6 +181,35 @@ TEST_CASE("global triangulation: planar to 1e-9 with every node of three faces a
     for (int f = 0; f < r.hex.faceCount(); ++f) CHECK(r.dual.boundaryFace[f] == 0);
     CHECK(r.coverageGap <= 1);
   }
+}
+
+TEST_CASE("global triangulation: on a parametric patch the boundary runs along the domain's sides") {
+  // The field mesh of an analytic surface is its parameter lattice split k x k. The lattice's half-shifted rows
+  // ended half a step in from the sides, so the field mesh's boundary zigzagged along two of them: the global
+  // method took the saw teeth for the surface's edge (boundary vertices up to 0.08 in from the hyperbolic
+  // paraboloid's side x = 1 at 2000 faces, the field along the teeth), and its boundary panels folded: 3 to 17
+  // of them cut in two at 800-4000 faces, each cut making a node of four faces.
+  const ParametricSurfacePtr s = makeSurface("hyperbolic-paraboloid");
+  const Triangulation t = globalTriangulation(*s, atFaces(2000));
+  const VertexRings rings = vertexRings(t.mesh);
+  int boundary = 0;
+  for (int v = 0; v < t.mesh.V.rows(); ++v) {
+    if (rings.closed[v]) continue;
+    ++boundary;
+    CHECK(std::max(std::abs(t.mesh.V(v, 0)), std::abs(t.mesh.V(v, 1))) > 1 - 1e-9);  // on a side of [-1, 1]^2
+  }
+  CHECK(boundary > 100);
+  PipelineParams p;
+  p.surface = "hyperbolic-paraboloid";
+  p.method = TriangulationMethod::Global;
+  p.faces = 1500;
+  const PipelineResult r = runPipeline(p);
+  CHECK(r.solve.converged);
+  CHECK(r.boundaryPanelsSplit == 0);
+  CHECK(r.interiorFacesSplit == 0);
+  std::vector<int> faces(r.hex.V.rows(), 0);
+  for (int idx : r.hex.indices) ++faces[idx];
+  for (int c : faces) CHECK(c <= 3);  // every node of three faces at most (two or one on the boundary)
 }
 
 TEST_CASE("global triangulation: the same mesh with one thread and with two") {

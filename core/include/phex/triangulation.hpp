@@ -48,8 +48,12 @@ enum class LatticeRows {
 
 // A lattice triangulation in parameter space: rows spaced so that triangles are close to equilateral in 3D
 // for edge length `cell`, every other row shifted by half a step. Every interior vertex has valence 6.
-// Periodic directions close up without a seam.
-Triangulation latticeTriangulation(const ParametricSurface& surface, double cell, LatticeRows rows = LatticeRows::Auto);
+// Periodic directions close up without a seam. The ends of the shifted rows zigzag half a step in from the
+// domain's sides (every interior vertex keeps valence 6); with `straightSides` those rows also get a vertex on
+// each side, so the boundary runs along the domain's edges (a sampling of the whole surface, as the global
+// method's field mesh needs).
+Triangulation latticeTriangulation(const ParametricSurface& surface, double cell, LatticeRows rows = LatticeRows::Auto,
+                                   bool straightSides = false);
 
 // What a triangulation promises for its dual P-Hex mesh (§4.2): every interior vertex's star checked in its
 // tangent plane with the vertex's Dupin indicatrix — each incident triangle, taken as the fundamental

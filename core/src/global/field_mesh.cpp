@@ -456,7 +456,7 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, cons
   } else if (const auto* parametric = dynamic_cast<const ParametricSurface*>(&surface)) {
     // The parameter lattice at kCoarseSplit edges, split k x k: its points in parameter space (periodic directions
     // unwrapped about each triangle's first corner), so that their geometry is exact.
-    Triangulation t = latticeTriangulation(*parametric, kCoarseSplit * edge);
+    Triangulation t = latticeTriangulation(*parametric, kCoarseSplit * edge, LatticeRows::Auto, true);
     const ParametricSurface::Domain d = parametric->domain();
     std::vector<int> source;
     const TriMesh fine = global::split(t.mesh, static_cast<int>(kCoarseSplit), m.where, source);
