@@ -388,6 +388,8 @@ const std::vector<SurfaceSpec>& analyticSurfaces() {
   // plane, the parameter lattice where the parameter lines are the curvature lines (torus, ring cyclide,
   // ellipsoid, Enneper: all hexagons, no seam). The elliptic paraboloid's principal field has two umbilics
   // inside the patch, where Method 2 breaks down; its parameter lines are conjugate (z_xy = 0) and umbilic-free.
+  // The bumps' umbilics inside parabolic rings leave no regular conjugate network at all (§7): the global method's
+  // singular vertices cover them with fewer faces cut than Method 2's systems of rows, and no strip left bare.
   struct Choice {
     const char* method;
     const char* field;
@@ -401,7 +403,7 @@ const std::vector<SurfaceSpec>& analyticSurfaces() {
       {"hyperboloid", {"prespecified", "principal"}},
       {"elliptic-paraboloid", {"prespecified", "param"}},
       {"hyperbolic-paraboloid", {"prespecified", "principal"}},
-      {"freeform", {"prespecified", "principal"}},
+      {"freeform", {"global", "principal"}},
       {"wave-roof", {"prespecified", "principal"}},
       {"enneper", {"lattice", "principal"}},
       {"catenoid", {"prespecified", "principal"}},

@@ -110,6 +110,7 @@ TEST_CASE("repair: stars no move mends are mended by edge flips (bumps' seams)")
   // faces the moves left 2 stars invalid. The flips leave none, and the note says how many edges turned.
   PipelineParams p;
   p.surface = "freeform";
+  p.method = TriangulationMethod::Prespecified;  // Method 2's systems of rows (auto lays the bumps globally)
   p.faces = 2000;
   const TriangulationStage t = triangulate(p);
   std::string note;

@@ -438,7 +438,7 @@ test("duality: 'auto' solves from the tangent dual as well where the Dupin one s
 
 test("folds: 'prevent' keeps faces simple, 'allow' reaches planarity by folding, anything else is named", async () => {
   // The solver alone: no face cut afterwards (which would cut the folded ones too), Dupin dual only.
-  const raw = { surface: 'freeform', faces: 2000, splitBoundary: 'off', duality: 'dupin' };
+  const raw = { surface: 'freeform', method: 'prespecified', faces: 2000, splitBoundary: 'off', duality: 'dupin' };
   const guarded = await phex.run(raw);
   const free = await phex.run({ ...raw, folds: 'allow' });
   assert.ok(free.solve.converged);
@@ -490,8 +490,9 @@ test("clipBoundary: anything but 'on' or 'off' is named, and the module stays us
 });
 
 test('the bumps are laid in several systems of rows and say so', async () => {
-  // No one regular conjugate network reaches both bumps: further systems cover what the first left.
-  const r = await phex.run({ surface: 'freeform', faces: 1000 });
+  // No one regular conjugate network reaches both bumps: further systems cover what the first left (Method 2;
+  // under auto the bumps are laid globally).
+  const r = await phex.run({ surface: 'freeform', method: 'prespecified', faces: 1000 });
   assert.ok(r.triangulation.systems > 1, String(r.triangulation.systems));
   assert.ok(r.triangulation.check.coverage > 0.85, String(r.triangulation.check.coverage));
   assert.ok(r.triangulation.notes.some((n) => /more systems of rows/.test(n)));
@@ -499,7 +500,7 @@ test('the bumps are laid in several systems of rows and say so', async () => {
   assert.equal(r.duality, 'tangent');
   assert.equal(r.metrics.selfIntersectingCount, 0);
   // From the Dupin dual, faces that crossed themselves across the parabolic rings are untangled: none is left folded.
-  const dupin = await phex.run({ surface: 'freeform', faces: 1000, duality: 'dupin' });
+  const dupin = await phex.run({ surface: 'freeform', method: 'prespecified', faces: 1000, duality: 'dupin' });
   assert.ok(dupin.dualUntangled > 0, String(dupin.dualUntangled));
   assert.equal(dupin.metrics.selfIntersectingCount, 0);
   assert.ok(dupin.solve.converged, String(dupin.metrics.planarityMax));
