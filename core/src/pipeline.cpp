@@ -1850,8 +1850,9 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     }
   }
 
-  // Cuts of a converged guarded solve against its dual's folds that send the global method's triangulation to an
-  // unguarded solve as well (below), and how much farther from the surface the unguarded one may then end.
+  // Cuts of a converged guarded solve (interior faces and boundary panels) against its dual's folds that send the
+  // global method's triangulation to an unguarded solve as well (below), and how much farther from the surface the
+  // unguarded one may then end.
   constexpr double kManyCutsRatio = 1.0, kManyCutsMore = 2, kFewerCutsFarther = 1.6;
   // Nodes farther off than this share of the distance goal are put back on the surface (putBack), at the price of
   // at most this many more interior faces cut.
@@ -1898,8 +1899,11 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // 0.08 % off (the bumps upload above then 0.09 %; the bubble at 5000 faces, anisotropy 1.503, 135 -> 29 cuts,
   // 87.1 -> 90.5 % hexagons, 0.05 % off, where the solve from the far nodes put back cut 7 more). On seven
   // orderings of the 40-run sweep, interior faces cut in the converged runs 1943 -> 1502 with both, none more.
+  // The nodes of four faces a result's cuts made: two per interior face cut, one per boundary panel (its other
+  // end on the boundary).
+  auto nodesOfFour = [](const PipelineResult& x) { return 2 * x.interiorFacesSplit + x.boundaryPanelsSplit; };
   const bool manyCuts = r.solve.converged && r.method == TriangulationMethod::Global && stageDual.folded >= 0 &&
-                        r.interiorFacesSplit > kManyCutsRatio * stageDual.folded + kManyCutsMore;
+                        r.interiorFacesSplit + r.boundaryPanelsSplit > kManyCutsRatio * stageDual.folded + kManyCutsMore;
   if ((!r.solve.converged || manyCuts) && params.preventFolds && params.solver == PlanarizeMethod::LocalGlobal) {
     po.preventFolds = false;
     PipelineResult t;
@@ -1907,7 +1911,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     po.preventFolds = true;
     bool keep = t.solve.converged && crossing(t.hex) == 0;
     if (keep && manyCuts) {
-      keep = t.interiorFacesSplit < r.interiorFacesSplit;
+      keep = nodesOfFour(t) < nodesOfFour(r);
       const double goal = std::max(kSurfaceDistanceGoal, offSurface(r));
       double off = keep ? offSurface(t) : 0.0;
       // Where it cuts fewer but ends farther off, its far nodes (three planes through nearly one line, which the
@@ -1919,8 +1923,8 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
           if (nearer < off) t = std::move(again), off = nearer;
         }
       }
-      keep = keep && t.interiorFacesSplit < r.interiorFacesSplit &&
-             off <= goal * (2 * t.interiorFacesSplit <= r.interiorFacesSplit ? kFewerCutsFarther : 1.0);
+      keep = keep && nodesOfFour(t) < nodesOfFour(r) &&
+             off <= goal * (2 * nodesOfFour(t) <= nodesOfFour(r) ? kFewerCutsFarther : 1.0);
     }
     if (keep && static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare) {
       takeSolve(std::move(t));
