@@ -1850,10 +1850,14 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     }
   }
 
-  // Cuts of a converged guarded solve (interior faces and boundary panels) against its dual's folds that send the
-  // global method's triangulation to an unguarded solve as well (below), and how much farther from the surface the
-  // unguarded one may then end.
+  // Interior faces cut by a converged guarded solve against its dual's folds that send the global method's
+  // triangulation to an unguarded solve as well (below), and how much farther from the surface the unguarded one
+  // may then end.
   constexpr double kManyCutsRatio = 1.0, kManyCutsMore = 2, kFewerCutsFarther = 1.6;
+  // ... or boundary panels cut, over this share of them (a boundary along asymptotic lines, where no boundary panel
+  // is planar without folding; on the uploaded bumps at 10k faces 41 of about 400 are cut, and counting them with
+  // the interior faces sent it unguarded for 150 ms and no node of four fewer).
+  constexpr double kManyPanelsCut = 0.25;
   // Nodes farther off than this share of the distance goal are put back on the surface (putBack), at the price of
   // at most this many more interior faces cut.
   constexpr double kPulledBack = 0.5;
@@ -1902,8 +1906,10 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // The nodes of four faces a result's cuts made: two per interior face cut, one per boundary panel (its other
   // end on the boundary).
   auto nodesOfFour = [](const PipelineResult& x) { return 2 * x.interiorFacesSplit + x.boundaryPanelsSplit; };
+  const auto boundaryPanels = std::count(r.dual.boundaryFace.begin(), r.dual.boundaryFace.end(), true);
   const bool manyCuts = r.solve.converged && r.method == TriangulationMethod::Global && stageDual.folded >= 0 &&
-                        r.interiorFacesSplit + r.boundaryPanelsSplit > kManyCutsRatio * stageDual.folded + kManyCutsMore;
+                        (r.interiorFacesSplit > kManyCutsRatio * stageDual.folded + kManyCutsMore ||
+                         r.boundaryPanelsSplit > kManyPanelsCut * double(boundaryPanels));
   if ((!r.solve.converged || manyCuts) && params.preventFolds && params.solver == PlanarizeMethod::LocalGlobal) {
     po.preventFolds = false;
     PipelineResult t;

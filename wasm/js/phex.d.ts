@@ -193,8 +193,8 @@ export interface SolveReport {
    * The solve kept ran without the fold guard (`folds: 'prevent'`, the default): the guarded one stalled short of
    * `tolerance`, and unguarded the mesh reached it with no face crossing itself and at most 1 in 10 faces cut
    * (the guard had refused steps through such shapes on the way to planar ones); or, with `method: 'global'`,
-   * the guarded one converged only by cutting more faces (interior faces and boundary panels) than fold
-   * unguarded, and the unguarded one's cuts made fewer nodes of four faces, with its nodes as near the surface.
+   * the guarded one converged only by cutting more interior faces than fold unguarded, or a quarter of the boundary
+   * panels, and the unguarded one's cuts made fewer nodes of four faces, with its nodes as near the surface.
    */
   foldsAllowed?: boolean;
   /** The solver the result comes from (the one asked for). */

@@ -143,9 +143,9 @@ struct PipelineResult {
   // The solve that was kept ran without the fold guard (PipelineParams::preventFolds): the guarded one stalled
   // short of the tolerance, and without it the mesh converged with no face crossing itself — the way to
   // planarity passed through steps the guard refused (Method 1 on cyclide patches past the parabolic circles);
-  // or, on the global method's triangulation, the guarded one converged only by cutting more faces (interior
-  // faces and boundary panels) than fold without the guard, and the unguarded one (its far nodes put back on the
-  // surface and solved again, where that brought them nearer) made fewer nodes of four faces by its cuts.
+  // or, on the global method's triangulation, the guarded one converged only by cutting more interior faces than
+  // fold without the guard, or a quarter of the boundary panels, and the unguarded one (its far nodes put back on
+  // the surface and solved again, where that brought them nearer) made fewer nodes of four faces by its cuts.
   bool foldsAllowed = false;
   // The solver the kept result comes from (the one asked for).
   PlanarizeMethod solverUsed = PlanarizeMethod::LocalGlobal;
