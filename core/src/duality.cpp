@@ -497,15 +497,15 @@ int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo, bool ru
         const Vec3 c = (geo[T.F(f, 0)].point + geo[T.F(f, 1)].point + geo[T.F(f, 2)].point) / 3;
         double longest = 0;
         for (int i = 0; i < 3; ++i) longest = std::max(longest, (geo[T.F(f, i)].point - geo[T.F(f, (i + 1) % 3)].point).norm());
+        const Vec3 mergedNormal = sumNormal[rb] + (sumNormal[ra].dot(sumNormal[rb]) < 0 ? Vec3(-sumNormal[ra]) : sumNormal[ra]);
         if ((nearestOnPlanes(N, d, c) - c).norm() > 0.75 * longest &&
             spreadOffPlane(count[ra] + count[rb], sumPoint[ra] + sumPoint[rb], sumSquares[ra] + sumSquares[rb],
-                           sumNormal[rb] + (sumNormal[ra].dot(sumNormal[rb]) < 0 ? Vec3(-sumNormal[ra]) : sumNormal[ra])) <=
-                kSharedPlaneSpread * h) {
+                           mergedNormal) <= kSharedPlaneSpread * h) {
           parent[ra] = rb;
           count[rb] += count[ra];
           sumPoint[rb] += sumPoint[ra];
           sumSquares[rb] += sumSquares[ra];
-          sumNormal[rb] += sumNormal[ra].dot(sumNormal[rb]) < 0 ? Vec3(-sumNormal[ra]) : sumNormal[ra];
+          sumNormal[rb] = mergedNormal;
           ++version[rb];
           merged = true;
         } else {

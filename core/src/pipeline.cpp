@@ -1854,9 +1854,10 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // triangulation to an unguarded solve as well (below), and how much farther from the surface the unguarded one
   // may then end.
   constexpr double kManyCutsRatio = 1.0, kManyCutsMore = 2, kFewerCutsFarther = 1.6;
-  // ... or boundary panels cut, over this share of them (a boundary along asymptotic lines, where no boundary panel
-  // is planar without folding; on the uploaded bumps at 10k faces 41 of about 400 are cut, and counting them with
-  // the interior faces sent it unguarded for 150 ms and no node of four fewer).
+  // ... or boundary panels cut, over this share of the boundary faces (a panel cut in two counts as its two pieces):
+  // a boundary along asymptotic lines, where no boundary panel is planar without folding. On the uploaded bumps at
+  // 10k faces 41 of about 400 are cut, and counting them with the interior faces sent it unguarded for 150 ms and
+  // no node of four fewer.
   constexpr double kManyPanelsCut = 0.25;
   // Nodes farther off than this share of the distance goal are put back on the surface (putBack), at the price of
   // at most this many more interior faces cut.
@@ -1906,10 +1907,10 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // The nodes of four faces a result's cuts made: two per interior face cut, one per boundary panel (its other
   // end on the boundary).
   auto nodesOfFour = [](const PipelineResult& x) { return 2 * x.interiorFacesSplit + x.boundaryPanelsSplit; };
-  const auto boundaryPanels = std::count(r.dual.boundaryFace.begin(), r.dual.boundaryFace.end(), true);
+  const auto boundaryFaces = std::count(r.dual.boundaryFace.begin(), r.dual.boundaryFace.end(), std::uint8_t{1});
   const bool manyCuts = r.solve.converged && r.method == TriangulationMethod::Global && stageDual.folded >= 0 &&
                         (r.interiorFacesSplit > kManyCutsRatio * stageDual.folded + kManyCutsMore ||
-                         r.boundaryPanelsSplit > kManyPanelsCut * double(boundaryPanels));
+                         r.boundaryPanelsSplit > kManyPanelsCut * double(boundaryFaces));
   if ((!r.solve.converged || manyCuts) && params.preventFolds && params.solver == PlanarizeMethod::LocalGlobal) {
     po.preventFolds = false;
     PipelineResult t;

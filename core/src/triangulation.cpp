@@ -191,18 +191,16 @@ std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface&
 std::vector<char> judgedStars(const TriMesh& T, const VertexRings& rings, const std::vector<LocalGeometry>& geo,
                               double edgeMean) {
   std::vector<char> judged(T.V.rows(), 0);
-  parallelRanges(static_cast<int>(T.V.rows()), kPointsPerThread, [&](int begin, int end) {
-    for (int v = begin; v < end; ++v) {
-      if (rings.triangles[v].empty() || !rings.closed[v]) continue;
-      const PointType type = classify(geo[v], 1e-6, edgeMean);
-      // A star across a parabolic curve (a neighbour where K has the other sign or vanishes: §6 step 1) has no
-      // single indicatrix to be judged by: the curvature its edges span changes in kind.
-      bool across = type == PointType::Parabolic || type == PointType::Planar;
-      for (int f : rings.triangles[v])
-        for (int k = 0; k < 3 && !across; ++k) across = classify(geo[T.F(f, k)], 1e-6, edgeMean) != type;
-      judged[v] = !across;
-    }
-  });
+  for (int v = 0; v < static_cast<int>(T.V.rows()); ++v) {
+    if (rings.triangles[v].empty() || !rings.closed[v]) continue;
+    const PointType type = classify(geo[v], 1e-6, edgeMean);
+    // A star across a parabolic curve (a neighbour where K has the other sign or vanishes: §6 step 1) has no
+    // single indicatrix to be judged by: the curvature its edges span changes in kind.
+    bool across = type == PointType::Parabolic || type == PointType::Planar;
+    for (int f : rings.triangles[v])
+      for (int k = 0; k < 3 && !across; ++k) across = classify(geo[T.F(f, k)], 1e-6, edgeMean) != type;
+    judged[v] = !across;
+  }
   return judged;
 }
 
