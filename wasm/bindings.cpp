@@ -127,6 +127,8 @@ phex::PipelineParams paramsFromJs(const val& o) {
   if (has(o, "foldFlips")) p.foldFlips = switchValue(o, "foldFlips", "on", "off");
   if (has(o, "alignment")) p.alignment = number(o, "alignment");
   if (has(o, "curvatureSizing")) p.curvatureSizing = number(o, "curvatureSizing");
+  if (has(o, "curvatureFloor")) p.curvatureFloor = number(o, "curvatureFloor");
+  if (has(o, "relay")) p.relay = switchValue(o, "relay", "on", "off");
   return p;
 }
 
@@ -273,6 +275,14 @@ val resultToJs(const phex::PipelineResult& r) {
   clip.set("nodesRemoved", r.boundaryClip.nodesRemoved);
   clip.set("gapMax", r.boundaryClip.gapMax);
   out.set("boundaryClip", clip);
+  val relay = val::object();
+  relay.set("tried", r.relay.tried);
+  relay.set("kept", r.relay.kept);
+  relay.set("anisotropy", r.relay.anisotropy);
+  relay.set("curvatureFloor", r.relay.curvatureFloor);
+  relay.set("firstReached", r.relay.firstReached);
+  relay.set("firstNodesOfFour", r.relay.firstNodesOfFour);
+  out.set("relay", relay);
   val origin = val::array();
   for (int k = 0; k < 3; ++k) origin.call<void>("push", r.origin(k));
   out.set("origin", origin);
@@ -350,7 +360,7 @@ val capabilities() {
   for (const char* f : {"principal", "angle:DEG", "param", "radial", "diverging", "spiral", "section"}) fields.call<void>("push", std::string(f));
   c.set("fields", fields);
   c.set("lowerBound", true);
-  c.set("globalOptions", true);  // anisotropy, alignment, curvatureSizing, foldFlips
+  c.set("globalOptions", true);  // anisotropy, alignment, curvatureSizing, curvatureFloor, foldFlips, relay
   val controls = val::array();
   for (const std::string& n : phex::subdivisionControls()) controls.call<void>("push", n);
   c.set("subdivisionControls", controls);

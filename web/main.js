@@ -27,7 +27,7 @@ const METHOD_TEXT = {
   global: 'Tiles any surface, uploaded or analytic, of any genus and boundary, along a 6-fold direction field in the Dupin metric: the field places pentagons and heptagons at its singular points (markers in the triangulation view), and every node joins three faces.',
 };
 // Parameters that apply to one method only: their fields show, and are sent, only when it is chosen.
-const METHOD_PARAMS = { global: ['anisotropy', 'alignment', 'curvatureSizing', 'foldFlips'] };
+const METHOD_PARAMS = { global: ['anisotropy', 'alignment', 'curvatureSizing', 'foldFlips', 'relay'] };
 // Parameters the global method does not read (its field is its own): hidden while it is chosen.
 const NOT_GLOBAL = ['field', 'lowerBound'];
 
@@ -401,7 +401,7 @@ function showSingularities(singularities) {
   dd.replaceChildren(String(singularities.index.length), ...parts.flatMap((span) => [' · ', span]), ` · sum ${sum}`);
 }
 
-function showStats({ metrics, solve, timings, method, field, triangulation, duality, boundaryClip, boundaryOffset }) {
+function showStats({ metrics, solve, timings, method, field, triangulation, duality, boundaryClip, boundaryOffset, relay }) {
   showNotes(triangulation?.notes ?? []);
   showSingularities(method === 'global' ? triangulation.singularities : null);
   const invalidStars = triangulation?.check?.invalidStars?.length;
@@ -441,7 +441,8 @@ function showStats({ metrics, solve, timings, method, field, triangulation, dual
     solve.boundaryPanelsSplit ? `, ${solve.boundaryPanelsSplit} boundary panel${solve.boundaryPanelsSplit > 1 ? 's' : ''} split` : ''}${
     solve.interiorFacesSplit ? `, ${solve.interiorFacesSplit} interior face${solve.interiorFacesSplit > 1 ? 's' : ''} split` : ''}${
     duality === 'tangent' && $('duality').value === 'auto' ? ', from the tangent dual' : ''}${
-    solve.foldsAllowed ? ', solved without the fold guard (none left folded)' : ''}`;
+    solve.foldsAllowed ? ', solved without the fold guard (none left folded)' : ''}${
+    relay?.tried ? `, laid twice (the ${relay.kept ? 'second' : 'first'} lay kept)` : ''}`;
   $('timings').textContent = Object.entries(timings)
     .filter(([stage]) => stage !== 'total')
     .map(([stage, t]) => `${stage} ${ms(t)}`)

@@ -325,6 +325,7 @@ GlobalOptions globalOptions(const PipelineParams& p, double cell) {
   o.anisotropy = p.anisotropy;
   o.alignment = p.alignment;
   o.curvatureSizing = p.curvatureSizing;
+  o.curvatureFloor = p.curvatureFloor;
   return o;
 }
 
@@ -1656,7 +1657,10 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
 // dual (runPipeline).
 constexpr Eigen::Index kTangentSampling = 4;
 
-PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
+namespace {
+
+// One lay and solve of `params` (runPipeline lays the global method twice where the first falls short).
+PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
   const auto t0 = std::chrono::steady_clock::now();
   PipelineResult r;
   r.solverUsed = params.solver;
@@ -2029,8 +2033,88 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   if (r.origin != Vec3::Zero())
     for (Points* V : {&r.initial.V, &r.hex.V, &r.dual.mesh.V}) V->rowwise() += r.origin.transpose();
   r.totalMilliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  if (progress) progress({"done", 1, "done"});
   return r;
+}
+
+// Reached a P-Hex mesh: converged, no face crossing itself, no node far off (the command line's exit 0).
+bool reached(const PipelineResult& r) {
+  return r.solve.converged && r.metrics.selfIntersectingCount == 0 && r.farNodes == 0;
+}
+// The nodes of four faces r's cuts made: two per interior face cut, one per boundary panel (its other end on the
+// boundary).
+int nodesOfFourCut(const PipelineResult& r) { return 2 * r.interiorFacesSplit + r.boundaryPanelsSplit; }
+
+}  // namespace
+
+PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
+  PipelineResult first = runOnce(params, progress, cancel);
+  const auto* upload = dynamic_cast<const MeshSurface*>(first.surface.get());
+  const bool noisy = upload && upload->noise() > MeshSurface::kNoisyMesh;
+  const bool fellShort = !reached(first) || nodesOfFourCut(first) > kRelayNodesOfFour * first.metrics.faceCount;
+  if (!params.relay || first.method != TriangulationMethod::Global || noisy || !fellShort) {
+    if (progress) progress({"done", 1, "done"});
+    return first;
+  }
+  // Laid again following the Dupin metric further. On a near-developable part the flatter curvature decides which
+  // triangles are valid (Props. 4, 5: with an edge off the flatter direction by more than about the curvature
+  // ratio, a dual face folds), and the default metric, bounded and regularized, follows little of it there.
+  PipelineParams again = params;
+  again.anisotropy = std::max(params.anisotropy, kRelayAnisotropy);
+  again.curvatureFloor = std::min(params.curvatureFloor, kRelayFloor);
+  if (progress) progress({"triangulate", 0, "laying again, following the Dupin metric further"});
+  PipelineResult second;
+  try {
+    second = runOnce(again, progress, cancel);
+  } catch (const Error& e) {
+    // The first lay stands where the second cannot be laid at all (a cancellation goes on to the caller).
+    if (e.code() == ErrorCode::Cancelled) throw;
+    first.relay.tried = true;
+    first.relay.anisotropy = again.anisotropy;
+    first.relay.curvatureFloor = again.curvatureFloor;
+    first.relay.firstReached = reached(first);
+    first.relay.firstNodesOfFour = nodesOfFourCut(first);
+    first.triangulation.notes.push_back(std::string("laid again following the Dupin metric further, the surface could "
+                                                    "not be tiled (") + e.what() + "): the first lay is kept");
+    if (progress) progress({"done", 1, "done"});
+    return first;
+  }
+  PipelineResult::Relay relay;
+  relay.tried = true;
+  relay.anisotropy = again.anisotropy;
+  relay.curvatureFloor = again.curvatureFloor;
+  relay.firstReached = reached(first);
+  relay.firstNodesOfFour = nodesOfFourCut(first);
+  // The one that reached a P-Hex mesh; both did: the one whose cuts made fewer nodes of four faces (then more
+  // hexagons); neither: the first.
+  const bool better = reached(second) != reached(first)
+                          ? reached(second)
+                          : reached(second) && (nodesOfFourCut(second) != nodesOfFourCut(first)
+                                                    ? nodesOfFourCut(second) < nodesOfFourCut(first)
+                                                    : second.interiorHexagonFraction > first.interiorHexagonFraction);
+  relay.kept = better;
+  PipelineResult& kept = better ? second : first;
+  {
+    std::ostringstream s;
+    s.precision(3);
+    s << "the first lay " << (relay.firstReached ? "converged" : "did not reach a P-Hex mesh") << " with "
+      << relay.firstNodesOfFour << " nodes of four faces from its cuts; laid again following the Dupin metric to an "
+      << "anisotropy of " << again.anisotropy << " (curvature floor " << again.curvatureFloor << "), which "
+      << (reached(second) ? "converged" : "did not reach a P-Hex mesh") << " with " << nodesOfFourCut(second)
+      << ": the " << (better ? "second" : "first") << " is kept";
+    kept.triangulation.notes.push_back(s.str());
+  }
+  kept.relay = relay;
+  // Both lays' time, stage by stage (in the order the first ran them).
+  std::vector<StageTiming> timings = first.timings;
+  for (const StageTiming& t : second.timings) {
+    auto same = std::find_if(timings.begin(), timings.end(), [&](const StageTiming& s) { return s.stage == t.stage; });
+    if (same != timings.end()) same->milliseconds += t.milliseconds;
+    else timings.push_back(t);
+  }
+  kept.timings = std::move(timings);
+  kept.totalMilliseconds = first.totalMilliseconds + second.totalMilliseconds;
+  if (progress) progress({"done", 1, "done"});
+  return std::move(kept);
 }
 
 }  // namespace phex

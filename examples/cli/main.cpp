@@ -59,6 +59,14 @@ Options of `phex run`:
                             (default 1; 0 leaves the field free but for the boundary; on smooth surfaces
                             a stronger pull often cuts fewer faces next to parabolic curves)
   --curvature-sizing S      global: how far the cell follows the curvature, 0..1 (default 0: uniform)
+  --curvature-floor F       global: where |curvature| is small the metric tends to the isotropic one: each
+                            principal |curvature| gets F times the surface's median largest one added
+                            before their ratio is taken, 0.01..1 (default 0.25; smaller follows a
+                            near-developable surface's elongated indicatrix further, up to --anisotropy)
+  --relay on|off            global: where the lay does not reach a P-Hex mesh, or its cuts make nodes of
+                            four faces at over 5 % of its faces, lay it again following the Dupin metric
+                            further (anisotropy 2.5, curvature floor 0.05) and keep the better (report:
+                            relay; not on noisy uploads) (default on)
   --fold-flips on|off       global: where the dual solved with folds allowed has faces crossing themselves
                             (at most 8 % of them), merge each one's vertex with its neighbour along the
                             flatter principal direction (else flip an edge of its star) and solve again:
@@ -235,7 +243,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                  {"duality", phex::dualityName(p.duality)}, {"solver", phex::methodName(p.solver)},
                  {"folds", p.preventFolds ? "prevent" : "allow"}, {"surfaceFit", p.fitSurface ? "on" : "off"},
                  {"splitBoundary", p.splitBoundaryPanels ? "on" : "off"}, {"clipBoundary", p.clipBoundary ? "on" : "off"},
-                 {"foldFlips", p.foldFlips ? "on" : "off"}};
+                 {"foldFlips", p.foldFlips ? "on" : "off"}, {"anisotropy", p.anisotropy}, {"alignment", p.alignment},
+                 {"curvatureSizing", p.curvatureSizing}, {"curvatureFloor", p.curvatureFloor}, {"relay", p.relay ? "on" : "off"}};
   if (p.start) params["start"] = {p.start->x(), p.start->y(), p.start->z()};
   if (p.direction) params["direction"] = {p.direction->x(), p.direction->y(), p.direction->z()};
   return {{"phex", "0.1.0"},
@@ -273,6 +282,9 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
                       {"boundaryPanelsSplit", r.boundaryPanelsSplit}, {"interiorFacesSplit", r.interiorFacesSplit},
                       {"foldsAllowed", r.foldsAllowed}, {"method", phex::methodName(r.solverUsed)}, {"log", log}}},
+          {"relay", {{"tried", r.relay.tried}, {"kept", r.relay.kept}, {"anisotropy", r.relay.anisotropy},
+                     {"curvatureFloor", r.relay.curvatureFloor}, {"firstReached", r.relay.firstReached},
+                     {"firstNodesOfFour", r.relay.firstNodesOfFour}}},
           {"surfaceFit", {{"applied", r.solve.surfaceFitted}, {"distanceBefore", r.solve.surfaceDistanceBefore},
                           {"distanceAfter", r.solve.surfaceDistanceAfter}, {"freeNodesSettled", r.solve.freeNodesSettled},
                           {"boundaryNodesPlaced", r.solve.boundaryNodesPlaced}}},
@@ -366,6 +378,8 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--lower-bound") p.lowerBound = parseNumber(a, value());
     else if (a == "--anisotropy") p.anisotropy = parseNumber(a, value());
     else if (a == "--fold-flips") p.foldFlips = parseSwitch(a, value(), "on", "off");
+    else if (a == "--relay") p.relay = parseSwitch(a, value(), "on", "off");
+    else if (a == "--curvature-floor") p.curvatureFloor = parseNumber(a, value());
     else if (a == "--alignment") p.alignment = parseNumber(a, value());
     else if (a == "--curvature-sizing") p.curvatureSizing = parseNumber(a, value());
     else if (a == "--start") p.start = parseVector(a, value());

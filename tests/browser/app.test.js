@@ -427,6 +427,10 @@ test('method global: its options show with their ranges, are named when out of r
   assert.match(await page.textContent('#singular-points'), /^\d+/);
   await afterRun(() => page.fill('#anisotropy', '2'));
   assert.match(page.url(), /anisotropy=2(&|$)/);
+  assert.ok(await page.isVisible('#relay'), 'the second lay can be turned off');
+  await afterRun(() => page.selectOption('#relay', 'off'));
+  assert.match(page.url(), /relay=off/);
+  await afterRun(() => page.selectOption('#relay', 'on'));
 
   // An option out of range is named; the next value works.
   await afterRun(() => page.fill('#curvatureSizing', '3'));

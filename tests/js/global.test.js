@@ -18,12 +18,14 @@ test("the API offers method 'global' and documents its options with their defaul
   assert.equal(caps.globalOptions, true);
   const spec = Object.fromEntries(PARAMETERS.map((p) => [p.name, p]));
   assert.ok(spec.method.values.includes('global'));
-  for (const [name, value, min, max] of [['anisotropy', 1.5, 1, 8], ['alignment', 1, 0, 10], ['curvatureSizing', 0, 0, 1]]) {
+  for (const [name, value, min, max] of [['anisotropy', 1.5, 1, 8], ['alignment', 1, 0, 10], ['curvatureSizing', 0, 0, 1], ['curvatureFloor', 0.25, 0.01, 1]]) {
     assert.deepEqual([spec[name].default, spec[name].min, spec[name].max], [value, min, max], name);
     assert.match(spec[name].description, /global/, name);
   }
   assert.deepEqual([spec.foldFlips.default, spec.foldFlips.values, spec.foldFlips.requires], ['on', ['on', 'off'], 'globalOptions']);
   assert.match(spec.foldFlips.description, /global/);
+  assert.deepEqual([spec.relay.default, spec.relay.values, spec.relay.requires], ['on', ['on', 'off'], 'globalOptions']);
+  assert.match(spec.relay.description, /global/);
 });
 
 // The core's global method is still being tuned (issue 31): it reaches planarity by cutting some faces in two.
@@ -130,6 +132,10 @@ test("the global method's options out of range reject with a PHexError naming th
     [{ curvatureSizing: 1.5 }, /curvatureSizing/],
     [{ curvatureSizing: -0.1 }, /curvatureSizing/],
     [{ foldFlips: 'sometimes' }, /foldFlips/],
+    [{ curvatureFloor: 0 }, /curvatureFloor/],
+    [{ curvatureFloor: 1.5 }, /curvatureFloor/],
+    [{ curvatureFloor: Number.NaN }, /curvatureFloor/],
+    [{ relay: 'twice' }, /relay/],
   ];
   for (const [options, message] of cases) {
     const error = await phex.run({ surface: 'torus', faces: 300, method: 'global', ...options }).then(
@@ -144,6 +150,20 @@ test("the global method's options out of range reject with a PHexError naming th
   const r = await phex.run({ surface: 'torus', faces: 300, method: 'global', anisotropy: 1, alignment: 0, curvatureSizing: 1 });
   assert.equal(r.method, 'global');
   assert.ok(r.metrics.faceCount > 150, String(r.metrics.faceCount));
+});
+
+test("relay reaches the core: a shallow dome the first lay leaves unconverged is laid again and converges", async () => {
+  // An elliptic paraboloid with radii of curvature 1 and 30: near-developable everywhere.
+  const params = { surface: 'elliptic-paraboloid', surfaceParams: { ra: 1, rb: 30 }, faces: 1000, method: 'global' };
+  const r = await phex.run(params);
+  assert.deepEqual([r.relay.tried, r.relay.kept, r.relay.firstReached, r.relay.anisotropy, r.relay.curvatureFloor], [true, true, false, 2.5, 0.05]);
+  assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
+  assert.ok(r.triangulation.notes.some((n) => /laid again following the Dupin metric/.test(n)), r.triangulation.notes.join('\n'));
+  const once = await phex.run({ ...params, relay: 'off' });
+  assert.equal(once.relay.tried, false);
+  assert.equal(once.solve.converged, false, 'the first lay alone stalls');
+  const torus = await globalTorus();
+  assert.equal(torus.relay.tried, false, 'a lay that reached a P-Hex mesh with few cuts is not laid again');
 });
 
 test("foldFlips reaches the core: on the torus the notes say how many vertices were merged, and fewer faces are cut", async () => {

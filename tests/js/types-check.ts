@@ -20,7 +20,7 @@ async function main(): Promise<void> {
   // The global method and its options, on an upload or an analytic surface.
   const method: Method = 'global';
   const global: RunParams = capabilities.globalOptions
-    ? { surface: 'torus', faces: 600, method, anisotropy: 2, alignment: 0.5, curvatureSizing: 0 }
+    ? { surface: 'torus', faces: 600, method, anisotropy: 2, alignment: 0.5, curvatureSizing: 0, curvatureFloor: 0.25, relay: 'on' }
     : { surface: 'torus', faces: 600, method };
   const globalSpecs: ParameterSpec[] = PARAMETERS.filter((p) => p.requires === 'globalOptions' || p.name === 'curvatureSizing');
   const tooltips: string[] = PARAMETERS.map((p) => `${p.name} (${p.min ?? ''}..${p.max ?? ''}, default ${p.default}): ${p.description}`);
@@ -37,10 +37,11 @@ async function main(): Promise<void> {
     const lines = result.triangulation.fieldLines;
     const farNodes: number = result.farNodes;
     const coverageGap: number = result.coverageGap;
+    const relayed: boolean = result.relay.tried && result.relay.kept && result.relay.firstNodesOfFour >= 0;
     const edgeOffset: number = result.boundaryOffset.max + result.solve.boundaryNodesPlaced;
     const clipped: number = result.boundaryClip.panels + result.boundaryClip.gapMax;
     const stats: [number, number, number, number, boolean] = [hexagons, worst, positions.length + index.length, faceOfTriangle.length, result.solve.converged];
-    console.log(version, stats, farNodes, coverageGap, edgeOffset, clipped, areas.length, lines?.offsets.length, result.timings.total, result.solve.log.map((l) => l.planarityMax), meshToOBJ(result.initial).length);
+    console.log(version, stats, farNodes, coverageGap, relayed, edgeOffset, clipped, areas.length, lines?.offsets.length, result.timings.total, result.solve.log.map((l) => l.planarityMax), meshToOBJ(result.initial).length);
     console.log(meshToOBJ(result.triangulation).length, meshToPLY(result.hex, { planarity: result.metrics.planarity }).length, tooltips.length);
     const field = await phex.run(global);
     const singular: Singularities | undefined = field.triangulation.singularities;

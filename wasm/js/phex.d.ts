@@ -267,6 +267,10 @@ export interface Result {
    * from the curve to the mesh's outline (the curve's height over the clipped panels' planes; where panels could
    * not be clipped, how far their edges stay from it), in mean panel edges, at most 2. All 0 on a closed surface. */
   boundaryClip: { panels: number; skipped: number; nodesMoved: number; nodesAdded: number; nodesRemoved: number; gapMax: number };
+  /** Method 'global''s second lay (`relay: 'on'`): whether it ran, whether this result is its, the metric it followed
+   * (anisotropy, curvature floor), and how the first lay ended: whether it reached a P-Hex mesh, and the nodes of
+   * four faces its cuts made (two per interior face cut, one per boundary panel). `tried` false: one lay. */
+  relay: { tried: boolean; kept: boolean; anisotropy: number; curvatureFloor: number; firstReached: boolean; firstNodesOfFour: number };
   /** An upload far from the origin (more than ten times its size: site coordinates) is computed about the
    * centre of its box, this point, where its coordinates keep their digits; every mesh and note here is in the
    * file's coordinates all the same. [0, 0, 0] otherwise. */
@@ -400,11 +404,25 @@ export interface RunParams {
    * either way).
    */
   curvatureSizing?: number;
+  /**
+   * Method 'global': where |curvature| is small the Dupin metric tends to the isotropic one: each principal
+   * |curvature| gets this share of the surface's median largest one added before their ratio is taken, in
+   * [0.01, 1]. Default 0.25; smaller values follow a near-developable surface's elongated indicatrix further (up
+   * to `anisotropy`).
+   */
+  curvatureFloor?: number;
+  /**
+   * Method 'global': where the lay does not reach a P-Hex mesh (not converged, faces crossing themselves or nodes
+   * far off), or its cuts make nodes of four faces at over 5 % of its faces, it is laid again following the Dupin
+   * metric further (anisotropy 2.5, curvature floor 0.05) and the better kept ('on', default; not on noisy
+   * uploads). `result.relay` says what ran. 'off': the first lay stands.
+   */
+  relay?: 'on' | 'off';
 }
 
 /** A run parameter as listed in {@link PARAMETERS}. */
 export interface ParameterSpec {
-  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'clipBoundary' | 'foldFlips' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing';
+  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'clipBoundary' | 'foldFlips' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing' | 'curvatureFloor' | 'relay';
   /** 'point': an [x, y, z] array, or null for the default. */
   type: 'integer' | 'number' | 'enum' | 'field' | 'point';
   default: number | string | null;
@@ -436,7 +454,7 @@ export interface Capabilities {
   fields: string[];
   /** `lowerBound` is accepted. */
   lowerBound: boolean;
-  /** The options of method 'global' (`anisotropy`, `alignment`, `curvatureSizing`) are accepted. */
+  /** The options of method 'global' (`anisotropy`, `alignment`, `curvatureSizing`, `curvatureFloor`, `foldFlips`, `relay`) are accepted. */
   globalOptions: boolean;
   /** {@link PHex.surfacePreview} is available. */
   surfacePreview: boolean;

@@ -32,6 +32,12 @@ struct GlobalOptions {
   // Largest ratio of the Dupin metric's two axes the field follows, in [1, 8]: 1 gives triangles equilateral
   // in space (an isotropic field), larger values follow the Dupin indicatrix further where it is elongated.
   double anisotropy = 1.5;
+  // Where |curvature| is small (flat parts, parabolic curves) the Dupin metric tends to the isotropic one instead of
+  // degenerating: each principal |curvature| gets this share of the surface's median largest |curvature| added
+  // before their ratio is taken, in [0.01, 1]. Smaller values follow a near-developable surface's elongated
+  // indicatrix further (up to `anisotropy`); larger ones keep the field nearer isotropic where the curvature is
+  // weak or unreliable.
+  double curvatureFloor = 0.25;
   // Weight of the alignment with the principal direction of least |curvature| where the metric is anisotropic,
   // against the field's smoothness, in [0, 10]; 0 leaves the field free but for the boundary.
   double alignment = 1.0;

@@ -25,6 +25,9 @@ constexpr double kFarNodeDistance = 0.01;
 // The goal for PipelineResult::coverageGap: every point of the surface within one mean panel edge of the P-Hex
 // mesh. Beyond it the notes name the place.
 constexpr double kCoverageGapGoal = 1.0;
+// The global method's second lay (PipelineParams::relay): the metric it follows, and the share of the faces beyond
+// which the first lay's cuts (two nodes of four faces per interior face cut, one per boundary panel) call for it.
+constexpr double kRelayAnisotropy = 2.5, kRelayFloor = 0.05, kRelayNodesOfFour = 0.05;
 
 // How the triangulation is laid (§5, §7).
 enum class TriangulationMethod {
@@ -89,10 +92,21 @@ struct PipelineParams {
   // neighbours move along the shared edge onto it. PipelineResult::boundaryClip counts them.
   bool clipBoundary = true;
   // The global method's field (GlobalOptions): the Dupin metric's largest anisotropy followed, in [1, 8]; the
-  // weight of the principal alignment, in [0, 10]; how far the cell follows the curvature, in [0, 1] (0: uniform).
+  // weight of the principal alignment, in [0, 10]; how far the cell follows the curvature, in [0, 1] (0: uniform);
+  // the curvature floor under which the metric tends to the isotropic one, as a share of the surface's median
+  // largest |curvature|, in [0.01, 1].
   double anisotropy = 1.5;
   double alignment = 1.0;
   double curvatureSizing = 0.0;
+  double curvatureFloor = 0.25;
+  // The global method laid again, following the Dupin metric further (anisotropy kRelayAnisotropy, curvature floor
+  // kRelayFloor), where the first lay did not reach a P-Hex mesh (not converged, faces crossing themselves or nodes
+  // far off) or its cuts made nodes of four faces at over kRelayNodesOfFour of its faces; the better of the two is
+  // kept (PipelineResult::relay). Not on noisy uploads, whose curvature ratios are unreliable (MeshSurface::noise).
+  // On a near-developable surface the flatter curvature decides which triangles are valid (Props. 4, 5), and the
+  // regularized metric follows too little of it: a shallow elliptic paraboloid (radii 1 and 30) laid globally
+  // stalls at 1000 and 5000 faces or cuts 273 faces at 3000, and converges with 3-22 cut laid again (METHOD.md).
+  bool relay = true;
   // The global method's triangulation: where its dual, solved with folds allowed, has faces crossing themselves
   // (at most 8 % of them: not on a coarse or noisy upload), each such face's vertex merged with its neighbour
   // along the flatter principal direction (or, where that cannot be done, an edge of its star flipped) and the
@@ -155,6 +169,15 @@ struct PipelineResult {
   // of its box, `origin`, where its coordinates keep their digits; the meshes here and the notes are in the
   // file's coordinates, `surface` in the local frame (its points plus origin are the file's). Zero otherwise.
   Vec3 origin = Vec3::Zero();
+  // The global method's second lay (PipelineParams::relay): whether it ran, whether its result is the one here,
+  // the metric it followed, and how the first lay ended (converged to a P-Hex mesh or not; the nodes of four faces
+  // its cuts made). The stages' timings are both lays'.
+  struct Relay {
+    bool tried = false, kept = false;
+    double anisotropy = 0, curvatureFloor = 0;
+    bool firstReached = false;
+    int firstNodesOfFour = 0;
+  } relay;
   std::vector<StageTiming> timings;
   double totalMilliseconds = 0.0;
 };

@@ -404,7 +404,7 @@ void buildTopology(FieldMesh& m, double fieldEdge, int coarse) {
 
 }  // namespace
 
-FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, const CancelFlag* cancel) {
+FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, double curvatureFloor, const CancelFlag* cancel) {
   FieldMesh m;
   std::vector<LocalGeometry> geo;
   if (const auto* mesh = dynamic_cast<const MeshSurface*>(&surface)) {
@@ -494,15 +494,16 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, cons
   if (nv == 0 || m.F.rows() == 0) throw Error(ErrorCode::CannotTile, "the surface has no triangles to lay a field on");
   for (int v = 0; v < nv; ++v) m.V.row(v) = geo[v].point.transpose();
 
-  // The Dupin metric, bounded: the frame's axes scale as the square roots of |k| + eps, where eps is a quarter
-  // of the surface's median largest |curvature| (flat parts and parabolic curves: the metric tends to the
-  // isotropic one there instead of degenerating), and their ratio is at most `anisotropy`.
+  // The Dupin metric, bounded: the frame's axes scale as the square roots of |k| + eps, where eps is
+  // `curvatureFloor` (by default a quarter) of the surface's median largest |curvature| (flat parts and parabolic
+  // curves: the metric tends to the isotropic one there instead of degenerating), and their ratio is at most
+  // `anisotropy`.
   m.curvature.resize(nv);
   for (int v = 0; v < nv; ++v) m.curvature[v] = geo[v].largestCurvature();
   std::vector<double> sorted = m.curvature;
   std::nth_element(sorted.begin(), sorted.begin() + nv / 2, sorted.end());
   const double typical = sorted[nv / 2];
-  const double eps = 0.25 * typical;
+  const double eps = curvatureFloor * typical;
   m.frame.resize(nv);
   m.alignWeight.assign(nv, 0.0);
   for (int v = 0; v < nv; ++v) {

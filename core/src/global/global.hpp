@@ -93,7 +93,7 @@ struct FieldMesh {
 // Samples `surface` with edges of about `edge` (an uploaded mesh split k x k, an analytic surface on its parameter
 // lattice) and sets the frames: the Dupin metric bounded to `anisotropy`, regularized where |curvature| is small
 // against the surface's typical curvature.
-FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, const CancelFlag* cancel);
+FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, double curvatureFloor, const CancelFlag* cancel);
 
 // One level of the multiresolution hierarchy the fields are smoothed on (level 0: the field mesh itself).
 struct Level {

@@ -15,6 +15,7 @@ void validate(const GlobalOptions& o) {
   if (!(o.cell >= 0) || !std::isfinite(o.cell)) bad("cell must be a finite number >= 0");
   if (o.cell == 0 && o.faces <= 0) bad("the global method needs a cell > 0 or a face count > 0");
   if (!(o.anisotropy >= 1 && o.anisotropy <= 8)) bad("anisotropy must be in [1, 8]");
+  if (!(o.curvatureFloor >= 0.01 && o.curvatureFloor <= 1)) bad("curvatureFloor must be in [0.01, 1]");
   if (!(o.alignment >= 0 && o.alignment <= 10)) bad("alignment must be in [0, 10]");
   if (!(o.curvatureSizing >= 0 && o.curvatureSizing <= 1)) bad("curvatureSizing must be in [0, 1]");
 }
@@ -108,7 +109,7 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
     cell *= kRetries[density][1];
     try {
       report(0.02, "field mesh");
-      FieldMesh m = fieldMesh(surface, cell / samples, options.anisotropy, cancel);
+      FieldMesh m = fieldMesh(surface, cell / samples, options.anisotropy, options.curvatureFloor, cancel);
       std::vector<double> scale = cellScale(m, options.curvatureSizing);
       report(0.1, "direction field");
       std::vector<Level> levels = hierarchy(m, scale);
