@@ -2062,28 +2062,24 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   again.anisotropy = std::max(params.anisotropy, kRelayAnisotropy);
   again.curvatureFloor = std::min(params.curvatureFloor, kRelayFloor);
   if (progress) progress({"triangulate", 0, "laying again, following the Dupin metric further"});
-  PipelineResult second;
-  try {
-    second = runOnce(again, progress, cancel);
-  } catch (const Error& e) {
-    // The first lay stands where the second cannot be laid at all (a cancellation goes on to the caller).
-    if (e.code() == ErrorCode::Cancelled) throw;
-    first.relay.tried = true;
-    first.relay.anisotropy = again.anisotropy;
-    first.relay.curvatureFloor = again.curvatureFloor;
-    first.relay.firstReached = reached(first);
-    first.relay.firstNodesOfFour = nodesOfFourCut(first);
-    first.triangulation.notes.push_back(std::string("laid again following the Dupin metric further, the surface could "
-                                                    "not be tiled (") + e.what() + "): the first lay is kept");
-    if (progress) progress({"done", 1, "done"});
-    return first;
-  }
   PipelineResult::Relay relay;
   relay.tried = true;
   relay.anisotropy = again.anisotropy;
   relay.curvatureFloor = again.curvatureFloor;
   relay.firstReached = reached(first);
   relay.firstNodesOfFour = nodesOfFourCut(first);
+  PipelineResult second;
+  try {
+    second = runOnce(again, progress, cancel);
+  } catch (const Error& e) {
+    // The first lay stands where the second cannot be laid at all (a cancellation goes on to the caller).
+    if (e.code() == ErrorCode::Cancelled) throw;
+    first.relay = relay;
+    first.triangulation.notes.push_back(std::string("laid again following the Dupin metric further, the surface could "
+                                                    "not be tiled (") + e.what() + "): the first lay is kept");
+    if (progress) progress({"done", 1, "done"});
+    return first;
+  }
   // The one that reached a P-Hex mesh; both did: the one whose cuts made fewer nodes of four faces (then more
   // hexagons); neither: the first.
   const bool better = reached(second) != reached(first)
@@ -2104,6 +2100,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
     kept.triangulation.notes.push_back(s.str());
   }
   kept.relay = relay;
+  kept.surfaceReused = first.surfaceReused;  // the second lay reuses the surface the first read
   // Both lays' time, stage by stage (in the order the first ran them).
   std::vector<StageTiming> timings = first.timings;
   for (const StageTiming& t : second.timings) {
