@@ -129,6 +129,7 @@ phex::PipelineParams paramsFromJs(const val& o) {
   if (has(o, "curvatureSizing")) p.curvatureSizing = number(o, "curvatureSizing");
   if (has(o, "curvatureFloor")) p.curvatureFloor = number(o, "curvatureFloor");
   if (has(o, "relay")) p.relay = switchValue(o, "relay", "on", "off");
+  if (has(o, "fairness")) p.fairness = number(o, "fairness");
   return p;
 }
 
@@ -360,7 +361,7 @@ val capabilities() {
   for (const char* f : {"principal", "angle:DEG", "param", "radial", "diverging", "spiral", "section"}) fields.call<void>("push", std::string(f));
   c.set("fields", fields);
   c.set("lowerBound", true);
-  c.set("globalOptions", true);  // anisotropy, alignment, curvatureSizing, curvatureFloor, foldFlips, relay
+  c.set("globalOptions", true);  // anisotropy, alignment, curvatureSizing, curvatureFloor, foldFlips, relay, fairness
   val controls = val::array();
   for (const std::string& n : phex::subdivisionControls()) controls.call<void>("push", n);
   c.set("subdivisionControls", controls);

@@ -309,8 +309,33 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
   // The vertex step: every vertex moved to the minimizer of its own terms for the current planes. Its
   // displacement depends on the planes and the vertex alone (over threads, below); the guard against folds then
   // looks at the faces as the vertices before it left them, so steps are taken one vertex after another.
+  // Each node's neighbours (along the faces' edges), and whether it is on the boundary (an edge of one face),
+  // for the fairness term: compressed rows of the faces' half-edges leaving each node.
+  std::vector<int> outStart, outEnd;
+  std::vector<char> boundaryNode;
+  if (options.fairness > 0) {
+    outStart.assign(nv + 1, 0);
+    for (int f = 0; f < nf; ++f)
+      for (int i = 0; i < mesh.faceSize(f); ++i) ++outStart[mesh.face(f)[i] + 1];
+    for (int v = 0; v < nv; ++v) outStart[v + 1] += outStart[v];
+    outEnd.resize(outStart[nv]);
+    std::vector<int> fill(outStart.begin(), outStart.end() - 1);
+    for (int f = 0; f < nf; ++f)
+      for (int i = 0, n = mesh.faceSize(f); i < n; ++i) outEnd[fill[mesh.face(f)[i]]++] = mesh.face(f)[(i + 1) % n];
+    boundaryNode.assign(nv, 0);
+    for (int a = 0; a < nv; ++a)
+      for (int k = outStart[a]; k < outStart[a + 1]; ++k) {
+        const int b = outEnd[k];
+        if (std::find(outEnd.begin() + outStart[b], outEnd.begin() + outStart[b + 1], a) == outEnd.begin() + outStart[b + 1])
+          boundaryNode[a] = boundaryNode[b] = 1;  // a -> b has no twin
+      }
+  }
   auto displacement = [&](int v, double lambda) -> Vec3 {
     const double wl = lambda / (h * h), wm = options.mu / (h * h);
+    // An interior node's half-edges out are all its neighbours, once each.
+    const double wf = options.fairness > 0 && lambda > 0 && !boundaryNode[v] && outStart[v + 1] > outStart[v]
+                          ? options.fairness * std::sqrt(lambda) / (h * h)
+                          : 0.0;
     // The right-hand side is the gradient at the current position, summed from per-face residuals
     // d_f − n_f·x_v: their round-off (relative to |x_v|, not to h) then only shifts the planes, which
     // moves the residuals by as little. Formed as b − A·x_v instead, the same round-off lands in
@@ -318,8 +343,13 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
     // nearly dependent (near parabolic curves): a free-form mesh of 100k faces stalled at planarity
     // 2–5e-9 that way, its energy flat at 2e-16 and jittering, while this form reaches 1e-10.
     const Vec3 xv = mesh.vertex(v);
-    Eigen::Matrix3d A = wl * Eigen::Matrix3d::Identity();
+    Eigen::Matrix3d A = (wl + wf) * Eigen::Matrix3d::Identity();
     Vec3 g = wl * (x0.row(v).transpose() - xv);
+    if (wf > 0) {
+      Vec3 mean = Vec3::Zero();
+      for (int k = outStart[v]; k < outStart[v + 1]; ++k) mean += mesh.vertex(outEnd[k]);
+      g += wf * (mean / double(outStart[v + 1] - outStart[v]) - xv);
+    }
     for (int k = vertexStart[v]; k < vertexStart[v + 1]; ++k) {
       const int f = vertexFaces[k];
       A += faceScale[f] * normal[f] * normal[f].transpose();

@@ -84,6 +84,10 @@ Options of `phex run`:
   --tolerance T             planarity goal relative to edge length (default 1e-9)
   --lambda L                initial closeness weight, divided by 10 every round (default 1)
   --mu M                    surface-distance weight (default 0)
+  --fairness F              global: the local solver pulls each interior node towards its neighbours'
+                            mean with F times the square root of lambda, gone with lambda: the faces'
+                            planes follow a smooth mesh instead of folding, 0..1 (default 0.03; not on
+                            noisy uploads)
   --max-iterations N        Gauss-Newton iteration cap (default 100)
   --duality auto|dupin|tangent
                             initial hexagonal mesh: Dupin duality (§6), tangent duality (§4.1), or
@@ -244,7 +248,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                  {"folds", p.preventFolds ? "prevent" : "allow"}, {"surfaceFit", p.fitSurface ? "on" : "off"},
                  {"splitBoundary", p.splitBoundaryPanels ? "on" : "off"}, {"clipBoundary", p.clipBoundary ? "on" : "off"},
                  {"foldFlips", p.foldFlips ? "on" : "off"}, {"anisotropy", p.anisotropy}, {"alignment", p.alignment},
-                 {"curvatureSizing", p.curvatureSizing}, {"curvatureFloor", p.curvatureFloor}, {"relay", p.relay ? "on" : "off"}};
+                 {"curvatureSizing", p.curvatureSizing}, {"curvatureFloor", p.curvatureFloor}, {"relay", p.relay ? "on" : "off"},
+                 {"fairness", p.fairness}};
   if (p.start) params["start"] = {p.start->x(), p.start->y(), p.start->z()};
   if (p.direction) params["direction"] = {p.direction->x(), p.direction->y(), p.direction->z()};
   return {{"phex", "0.1.0"},
@@ -380,6 +385,7 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--fold-flips") p.foldFlips = parseSwitch(a, value(), "on", "off");
     else if (a == "--relay") p.relay = parseSwitch(a, value(), "on", "off");
     else if (a == "--curvature-floor") p.curvatureFloor = parseNumber(a, value());
+    else if (a == "--fairness") p.fairness = parseNumber(a, value());
     else if (a == "--alignment") p.alignment = parseNumber(a, value());
     else if (a == "--curvature-sizing") p.curvatureSizing = parseNumber(a, value());
     else if (a == "--start") p.start = parseVector(a, value());

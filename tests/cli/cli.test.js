@@ -102,6 +102,7 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--clip-boundary', 'sometimes'], /--clip-boundary must be on or off/],
     [['run', '--fold-flips', 'sometimes'], /--fold-flips must be on or off/],
     [['run', '--relay', 'twice'], /--relay must be on or off/],
+    [['run', '--fairness', '2'], /fairness must be in \[0, 1\]/],
     [['run', '--curvature-floor', '0'], /curvatureFloor must be in \[0\.01, 1\]/],
     [['run', '--start', '1,2'], /--start expects X,Y,Z/],
     [['run', '--direction', '0,0,0'], /direction must be a non-zero vector/],

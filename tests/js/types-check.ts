@@ -20,7 +20,7 @@ async function main(): Promise<void> {
   // The global method and its options, on an upload or an analytic surface.
   const method: Method = 'global';
   const global: RunParams = capabilities.globalOptions
-    ? { surface: 'torus', faces: 600, method, anisotropy: 2, alignment: 0.5, curvatureSizing: 0, curvatureFloor: 0.25, relay: 'on' }
+    ? { surface: 'torus', faces: 600, method, anisotropy: 2, alignment: 0.5, curvatureSizing: 0, curvatureFloor: 0.25, relay: 'on', fairness: 0.03 }
     : { surface: 'torus', faces: 600, method };
   const globalSpecs: ParameterSpec[] = PARAMETERS.filter((p) => p.requires === 'globalOptions' || p.name === 'curvatureSizing');
   const tooltips: string[] = PARAMETERS.map((p) => `${p.name} (${p.min ?? ''}..${p.max ?? ''}, default ${p.default}): ${p.description}`);

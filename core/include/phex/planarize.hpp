@@ -31,6 +31,12 @@ struct PlanarizeOptions {
   PlanarizeMethod method = PlanarizeMethod::LocalGlobal;
   double lambda = 1.0;        // closeness weight of F_s at the first round; divided by 10 each round (§6)
   double mu = 0.0;            // weight of F_d, the squared distance to the surface (needs `surface`)
+  // The local solver's fairness: each interior node (not on the mesh's boundary) pulled towards the mean of its
+  // neighbours with weight fairness * sqrt(λ) per squared mean edge. It fades with λ, more slowly than the
+  // closeness term, and is gone with it, so the end is as planar as without it: meanwhile the faces' planes
+  // follow a smooth mesh instead of chasing the intersections of nearly parallel planes (flat parts, parabolic
+  // curves, noise) into folds.
+  double fairness = 0.0;
   double tolerance = 1e-9;    // stop when max face planarity (relative to edge length) is at most this
   int maxIterations = 100;    // cap on Gauss-Newton iterations over all rounds
   const Surface* surface = nullptr;
