@@ -194,7 +194,9 @@ export interface SolveReport {
    * `tolerance`, and unguarded the mesh reached it with no face crossing itself and at most 1 in 10 faces cut
    * (the guard had refused steps through such shapes on the way to planar ones); or, with `method: 'global'`,
    * the guarded one converged only by cutting more interior faces than fold unguarded, or a quarter of the boundary
-   * panels, and the unguarded one's cuts made fewer nodes of four faces, with its nodes as near the surface.
+   * panels, and the unguarded one's cuts made fewer nodes of four faces, with its nodes as near the surface; or,
+   * with the solver's `fairness` (method 'global', not on noisy uploads), the unguarded solve came first and
+   * converged with none crossing itself, within a tenth of the faces cut and the distance goal.
    */
   foldsAllowed?: boolean;
   /** The solver the result comes from (the one asked for). */
