@@ -306,9 +306,6 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
   // Whether face f, projected onto its current plane, is a simple polygon.
   auto faceIsSimple = [&](int f) { return faceScale[f] == 0 || !faceSelfIntersects(mesh, f, normal[f]); };
   long foldsPrevented = 0;
-  // The vertex step: every vertex moved to the minimizer of its own terms for the current planes. Its
-  // displacement depends on the planes and the vertex alone (over threads, below); the guard against folds then
-  // looks at the faces as the vertices before it left them, so steps are taken one vertex after another.
   // Each node's neighbours (along the faces' edges), and whether it is on the boundary (an edge of one face),
   // for the fairness term: compressed rows of the faces' half-edges leaving each node.
   std::vector<int> outStart, outEnd;
@@ -330,6 +327,9 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
           boundaryNode[a] = boundaryNode[b] = 1;  // a -> b has no twin
       }
   }
+  // The vertex step: every vertex moved to the minimizer of its own terms for the current planes. Its
+  // displacement depends on the planes and the vertex alone (over threads, below); the guard against folds then
+  // looks at the faces as the vertices before it left them, so steps are taken one vertex after another.
   auto displacement = [&](int v, double lambda) -> Vec3 {
     const double wl = lambda / (h * h), wm = options.mu / (h * h);
     // An interior node's half-edges out are all its neighbours, once each.
