@@ -1,5 +1,6 @@
 // phex — fuzz target: the whole pipeline on a tiny uploaded mesh (fuzz.hpp: decodeMesh, written as the OBJ
-// file a user would upload), at most 60 faces, with the method (the global one with its field options too),
+// file a user would upload), at most 60 faces, with the method (the global one with its field options, the
+// solver's fairness and the second lay too),
 // field, duality, solver and options a byte picks. It tiles the mesh or refuses it; what it returns is finite.
 #include <phex/pipeline.hpp>
 
@@ -31,6 +32,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     p.anisotropy = 1 + (options & 7);                // 1 .. 8
     p.alignment = 10.0 * ((options >> 3) & 3) / 3;   // 0 .. 10
     p.curvatureSizing = ((options >> 5) & 3) / 3.0;  // 0 .. 1
+    p.relay = !(options & 0x80);
+    const std::uint8_t solver = in.byte();
+    p.fairness = (solver & 3) / 3.0;                          // 0 .. 1
+    p.curvatureFloor = 0.01 + 0.99 * ((solver >> 2) & 7) / 7;  // 0.01 .. 1
   }
   const phex::TriMesh m = decodeMesh(in);
   std::string obj;
