@@ -1676,6 +1676,14 @@ constexpr Eigen::Index kTangentSampling = 4;
 
 namespace {
 
+// Reached a P-Hex mesh: converged, no face crossing itself, no node far off (the command line's exit 0).
+bool reached(const PipelineResult& r) {
+  return r.solve.converged && r.metrics.selfIntersectingCount == 0 && r.farNodes == 0;
+}
+// The nodes of four faces r's cuts made: two per interior face cut, one per boundary panel (its other end on the
+// boundary).
+int nodesOfFourCut(const PipelineResult& r) { return 2 * r.interiorFacesSplit + r.boundaryPanelsSplit; }
+
 // One lay and solve of `params` (runPipeline lays the global method twice where the first falls short).
 PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -1822,6 +1830,11 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
   // uploaded bumps at 10k faces stalled, and the tangent dual's solve and then the unguarded one ran after it:
   // planarize 231 -> 864 ms for the same mesh as the unguarded one alone gives in 118 ms. Over 40 runs of clean
   // surfaces the same figures within a few nodes of four (640 -> 669, hexagons 91.05 -> 91.00 %).
+  const double diagonal = surface.bounds().diagonal().norm();
+  auto offSurface = [&](const PipelineResult& x) {  // the largest node distance over the diagonal
+    if (po.fitSurface && x.solve.converged) return x.solve.surfaceDistanceAfter;  // planarize measured it
+    return diagonal > 0 ? largestSurfaceDistance(x.hex, surface) / diagonal : 0.0;
+  };
   bool settled = false;
   if (r.method == TriangulationMethod::Global && po.fairness > 0 && params.preventFolds &&
       params.solver == PlanarizeMethod::LocalGlobal && params.duality == Duality::Auto) {
@@ -1829,12 +1842,8 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
     po.preventFolds = false;
     solveFrom(t, Duality::Dupin, dualOf(Duality::Dupin));
     po.preventFolds = true;
-    const double diag = surface.bounds().diagonal().norm();
-    const double off = po.fitSurface && t.solve.converged ? t.solve.surfaceDistanceAfter
-                       : diag > 0                          ? largestSurfaceDistance(t.hex, surface) / diag
-                                                           : 0.0;
     if (t.solve.converged && crossing(t.hex) == 0 &&
-        static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare && off <= kSurfaceDistanceGoal) {
+        static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare && offSurface(t) <= kSurfaceDistanceGoal) {
       takeSolve(std::move(t));
       r.foldsAllowed = true;
       settled = true;
@@ -1855,11 +1864,6 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
   // dual 0.212 % of the diagonal off (every surface fit folds faces at the farthest node), from the Dupin dual
   // 0.170 %, with 25 interior faces cut against 30. That one is kept where it converges with no face crossing
   // itself and meets the goal, or comes closer without cutting more. (Duality::Auto only.)
-  const double diagonal = surface.bounds().diagonal().norm();
-  auto offSurface = [&](const PipelineResult& x) {  // the largest node distance over the diagonal
-    if (po.fitSurface && x.solve.converged) return x.solve.surfaceDistanceAfter;  // planarize measured it
-    return diagonal > 0 ? largestSurfaceDistance(x.hex, surface) / diagonal : 0.0;
-  };
   if (params.duality == Duality::Auto) {
     const int crossed = crossing(r.hex);
     const bool far = r.solve.converged && crossed == 0 && !firstStalled && offSurface(r) > kSurfaceDistanceGoal;
@@ -1950,9 +1954,6 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
   // 0.08 % off (the bumps upload above then 0.09 %; the bubble at 5000 faces, anisotropy 1.503, 135 -> 29 cuts,
   // 87.1 -> 90.5 % hexagons, 0.05 % off, where the solve from the far nodes put back cut 7 more). On seven
   // orderings of the 40-run sweep, interior faces cut in the converged runs 1943 -> 1502 with both, none more.
-  // The nodes of four faces a result's cuts made: two per interior face cut, one per boundary panel (its other
-  // end on the boundary).
-  auto nodesOfFour = [](const PipelineResult& x) { return 2 * x.interiorFacesSplit + x.boundaryPanelsSplit; };
   const auto boundaryFaces = std::count(r.dual.boundaryFace.begin(), r.dual.boundaryFace.end(), std::uint8_t{1});
   const bool manyCuts = r.solve.converged && r.method == TriangulationMethod::Global && stageDual.folded >= 0 &&
                         (r.interiorFacesSplit > kManyCutsRatio * stageDual.folded + kManyCutsMore ||
@@ -1964,7 +1965,7 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
     po.preventFolds = true;
     bool keep = t.solve.converged && crossing(t.hex) == 0;
     if (keep && manyCuts) {
-      keep = nodesOfFour(t) < nodesOfFour(r);
+      keep = nodesOfFourCut(t) < nodesOfFourCut(r);
       const double goal = std::max(kSurfaceDistanceGoal, offSurface(r));
       double off = keep ? offSurface(t) : 0.0;
       // Where it cuts fewer but ends farther off, its far nodes (three planes through nearly one line, which the
@@ -1976,8 +1977,8 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
           if (nearer < off) t = std::move(again), off = nearer;
         }
       }
-      keep = keep && nodesOfFour(t) < nodesOfFour(r) &&
-             off <= goal * (2 * nodesOfFour(t) <= nodesOfFour(r) ? kFewerCutsFarther : 1.0);
+      keep = keep && nodesOfFourCut(t) < nodesOfFourCut(r) &&
+             off <= goal * (2 * nodesOfFourCut(t) <= nodesOfFourCut(r) ? kFewerCutsFarther : 1.0);
     }
     if (keep && static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare) {
       takeSolve(std::move(t));
@@ -2077,14 +2078,6 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
   r.totalMilliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }
-
-// Reached a P-Hex mesh: converged, no face crossing itself, no node far off (the command line's exit 0).
-bool reached(const PipelineResult& r) {
-  return r.solve.converged && r.metrics.selfIntersectingCount == 0 && r.farNodes == 0;
-}
-// The nodes of four faces r's cuts made: two per interior face cut, one per boundary panel (its other end on the
-// boundary).
-int nodesOfFourCut(const PipelineResult& r) { return 2 * r.interiorFacesSplit + r.boundaryPanelsSplit; }
 
 }  // namespace
 

@@ -306,8 +306,8 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
   // Whether face f, projected onto its current plane, is a simple polygon.
   auto faceIsSimple = [&](int f) { return faceScale[f] == 0 || !faceSelfIntersects(mesh, f, normal[f]); };
   long foldsPrevented = 0;
-  // Each node's neighbours (along the faces' edges), and whether it is on the boundary (an edge of one face),
-  // for the fairness term: compressed rows of the faces' half-edges leaving each node.
+  // Each node's neighbours (along the faces' edges), and whether it is on the boundary (boundaryNodes), for the
+  // fairness term: compressed rows of the faces' half-edges leaving each node.
   std::vector<int> outStart, outEnd;
   std::vector<char> boundaryNode;
   if (options.fairness > 0) {
@@ -319,13 +319,7 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
     std::vector<int> fill(outStart.begin(), outStart.end() - 1);
     for (int f = 0; f < nf; ++f)
       for (int i = 0, n = mesh.faceSize(f); i < n; ++i) outEnd[fill[mesh.face(f)[i]]++] = mesh.face(f)[(i + 1) % n];
-    boundaryNode.assign(nv, 0);
-    for (int a = 0; a < nv; ++a)
-      for (int k = outStart[a]; k < outStart[a + 1]; ++k) {
-        const int b = outEnd[k];
-        if (std::find(outEnd.begin() + outStart[b], outEnd.begin() + outStart[b + 1], a) == outEnd.begin() + outStart[b + 1])
-          boundaryNode[a] = boundaryNode[b] = 1;  // a -> b has no twin
-      }
+    boundaryNode = boundaryNodes(mesh);
   }
   // The vertex step: every vertex moved to the minimizer of its own terms for the current planes. Its
   // displacement depends on the planes and the vertex alone (over threads, below); the guard against folds then
