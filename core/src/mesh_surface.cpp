@@ -1131,4 +1131,9 @@ Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
   return w(0) * a + w(1) * b + w(2) * c;
 }
 
+bool noisyUpload(const Surface& surface) {
+  const auto* upload = dynamic_cast<const MeshSurface*>(&surface);
+  return upload && upload->noise() > MeshSurface::kNoisyMesh;
+}
+
 }  // namespace phex

@@ -727,13 +727,6 @@ PlanarizeOptions planarizeOptions(const PipelineParams& params, const Surface& s
   return po;
 }
 
-// An upload whose vertices lie off smooth fits of their neighbourhoods (MeshSurface::noise): its curvature ratios
-// are noise.
-bool noisyUpload(const Surface& surface) {
-  const auto* upload = dynamic_cast<const MeshSurface*>(&surface);
-  return upload && upload->noise() > MeshSurface::kNoisyMesh;
-}
-
 // The local solver's fairness for `method` on `surface` (PipelineParams::fairness): the global method's solves, but
 // not on a noisy upload. The paper's methods lay rows whose duals their figures were measured without it. On the
 // noisy shared models it turned stalls into convergence by cutting many faces (3holes at 3000 faces: 4 -> 48 cut,

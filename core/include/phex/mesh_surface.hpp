@@ -202,6 +202,10 @@ class MeshSurface : public Surface {
   std::vector<Eigen::Vector4d> spheres_;  // per triangle: a ball holding it (centre, radius), for quick rejection
 };
 
+// Whether `surface` is an uploaded mesh whose vertices lie off smooth fits of their neighbourhoods (noise() over
+// kNoisyMesh): its curvature ratios are noise, and the steps tuned on smooth surfaces leave it alone.
+bool noisyUpload(const Surface& surface);
+
 // The point of triangle abc nearest to p (exact, by the Voronoi regions of its corners, edges and face).
 Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 

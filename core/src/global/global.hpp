@@ -174,8 +174,10 @@ void fitToField(TriMesh& T, const std::vector<int>& seeds, const Surface& surfac
 
 // Flips edges of `T` where that brings its vertices' valences nearer 6 (4 on the boundary) in sum of squares, and the
 // two new triangles stay on the surface's side and are no slivers (the lattice's local mix-ups: a vertex of valence
-// 8 ringed by 5s). Dislocations (a 5 next to a 7) only move. Returns how many were flipped.
-int improveValences(TriMesh& T, const Surface& surface, const CancelFlag* cancel);
+// 8 ringed by 5s); then, with `glide`, inside the boundary, sequences of flips that glide dislocations (a 5 next to a
+// 7) along their rows until two of opposite sense meet and cancel, or one meets a singular vertex (relax.cpp). Returns
+// how many were flipped.
+int improveValences(TriMesh& T, const Surface& surface, bool glide, const CancelFlag* cancel);
 
 
 }  // namespace phex::global

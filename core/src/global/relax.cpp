@@ -3,6 +3,7 @@
 // 5 tolerate less and less misalignment, that is enough to fold panels. Fitted in least squares to the lattice
 // vectors the edges stand for, the rows follow the field's lines again.
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <Eigen/Sparse>
@@ -92,71 +93,192 @@ void fitToField(TriMesh& T, const std::vector<int>& seeds, const Surface& surfac
 
 namespace phex::global {
 
-int improveValences(TriMesh& T, const Surface& surface, const CancelFlag* cancel) {
-  const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
-  if (nf == 0) return 0;
-  // Each vertex's triangles, kept as the flips change them (a hash map of every half-edge took a quarter of this
-  // at 100k faces). The triangulation is a manifold here (the extraction made it one): a half-edge a -> b is in
-  // one triangle at most, found among a's.
-  std::vector<std::vector<int>> around(nv);
-  for (int f = 0; f < nf; ++f)
-    for (int c = 0; c < 3; ++c) around[T.F(f, c)].push_back(f);
-  // The half-edge a -> b as 3 f + c (corner c: F(f, c) = a, F(f, c + 1) = b), or -1.
-  auto halfEdge = [&](int a, int b) {
-    for (int f : around[a])
-      for (int c = 0; c < 3; ++c)
-        if (T.F(f, c) == a && T.F(f, (c + 1) % 3) == b) return 3 * f + c;
-    return -1;
+namespace {
+
+// The triangulation's edge flips, kept undoable: each vertex's triangles (a hash map of every half-edge took a quarter
+// of the greedy pass's time at 100k faces), valences, and which vertices are on the boundary. The triangulation is a
+// manifold here (the extraction made it one): a half-edge a -> b is in one triangle at most, found among a's.
+class Flips {
+ public:
+  struct Flip {
+    int f = -1, g = -1, a = -1, b = -1, p = -1, q = -1;
   };
-  std::vector<int> valence(nv, 0);
-  std::vector<char> boundary(nv, 0);
-  for (int f = 0; f < nf; ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int a = T.F(f, c), b = T.F(f, (c + 1) % 3);
-      if (halfEdge(b, a) < 0) boundary[a] = boundary[b] = 1, ++valence[a], ++valence[b];
-      else if (a < b) ++valence[a], ++valence[b];
-    }
-  // A boundary vertex's ideal valence is 4 (half a hexagon's star), an interior one's 6.
-  auto excess = [&](int v, int change) {
-    const int d = valence[v] + change - (boundary[v] ? 4 : 6);
-    return d * d;
-  };
-  auto leave = [&](int v, int f) { around[v].erase(std::find(around[v].begin(), around[v].end(), f)); };
-  int flips = 0;
-  for (int pass = 0; pass < 8; ++pass) {
-    checkCancel(cancel);
-    int flipped = 0;
+
+  explicit Flips(TriMesh& T) : T_(T), around_(T.V.rows()), valence_(T.V.rows(), 0), boundary_(T.V.rows(), 0) {
+    const int nf = static_cast<int>(T.F.rows());
+    for (int f = 0; f < nf; ++f)
+      for (int c = 0; c < 3; ++c) around_[T.F(f, c)].push_back(f);
     for (int f = 0; f < nf; ++f)
       for (int c = 0; c < 3; ++c) {
-        const int a = T.F(f, c), b = T.F(f, (c + 1) % 3), p = T.F(f, (c + 2) % 3);
-        if (a > b) continue;
-        const int twin = halfEdge(b, a);
-        if (twin < 0) continue;
-        const int g = twin / 3, gc = twin % 3;
-        const int q = T.F(g, (gc + 2) % 3);
-        if (p == q || valence[a] <= 3 || valence[b] <= 3 || halfEdge(p, q) >= 0 || halfEdge(q, p) >= 0) continue;
-        const int before = excess(a, 0) + excess(b, 0) + excess(p, 0) + excess(q, 0);
-        const int after = excess(a, -1) + excess(b, -1) + excess(p, 1) + excess(q, 1);
-        if (after >= before) continue;
-        // Geometry: the new triangles (p, a, q) and (q, b, p) keep the surface's side (the quad a q b p is convex
-        // seen along the normal) and are not slivers.
-        const Vec3 A = T.V.row(a).transpose(), B = T.V.row(b).transpose(), P = T.V.row(p).transpose(),
-                   Q = T.V.row(q).transpose();
-        const Vec3 n = surface.closestPoint(0.25 * (A + B + P + Q)).normal;
-        const double t1 = dot(cross(A - P, Q - P), n), t2 = dot(cross(Q - P, B - P), n);
-        const double scale = (Q - P).squaredNorm() + (A - B).squaredNorm();
-        if (!(t1 > 0.1 * scale * 0.5) || !(t2 > 0.1 * scale * 0.5)) continue;
-        // Flip: triangle f becomes (p, a, q), triangle g becomes (q, b, p); a leaves g, b leaves f, p joins g, q f.
-        T.F.row(f) << p, a, q;
-        T.F.row(g) << q, b, p;
-        leave(a, g), leave(b, f), around[p].push_back(g), around[q].push_back(f);
-        --valence[a], --valence[b], ++valence[p], ++valence[q];
-        ++flipped;
+        const int a = T.F(f, c), b = T.F(f, (c + 1) % 3);
+        if (halfEdge(b, a) < 0) boundary_[a] = boundary_[b] = 1, ++valence_[a], ++valence_[b];
+        else if (a < b) ++valence_[a], ++valence_[b];
       }
-    flips += flipped;
-    if (flipped == 0) break;
   }
-  return flips;
+
+  // The half-edge a -> b as 3 f + c (corner c: F(f, c) = a, F(f, c + 1) = b), or -1.
+  int halfEdge(int a, int b) const {
+    for (int f : around_[a])
+      for (int c = 0; c < 3; ++c)
+        if (T_.F(f, c) == a && T_.F(f, (c + 1) % 3) == b) return 3 * f + c;
+    return -1;
+  }
+
+  // A boundary vertex's ideal valence is 4 (half a hexagon's star), an interior one's 6: the squared miss.
+  int excess(int v, int change = 0) const {
+    const int d = valence_[v] + change - (boundary_[v] ? 4 : 6);
+    return d * d;
+  }
+  bool irregular(int v) const { return excess(v) > 0; }
+  int corner(int f, int c) const { return T_.F(f, c); }
+  bool onBoundary(int v) const { return boundary_[v]; }
+  const std::vector<int>& around(int v) const { return around_[v]; }
+
+  // The flip of the edge of triangle f at corner c, if the topology allows it: an interior edge whose ends keep
+  // three edges at least and whose opposite corners are not joined yet.
+  bool flippable(int f, int c, Flip& out) const {
+    const int a = T_.F(f, c), b = T_.F(f, (c + 1) % 3), p = T_.F(f, (c + 2) % 3);
+    const int twin = halfEdge(b, a);
+    if (twin < 0) return false;
+    const int g = twin / 3, q = T_.F(g, (twin % 3 + 2) % 3);
+    if (p == q || valence_[a] <= 3 || valence_[b] <= 3 || halfEdge(p, q) >= 0 || halfEdge(q, p) >= 0) return false;
+    out = {f, g, a, b, p, q};
+    return true;
+  }
+  // How the flip changes the sum of squared misses.
+  int change(const Flip& x) const {
+    return excess(x.a, -1) + excess(x.b, -1) + excess(x.p, 1) + excess(x.q, 1) - excess(x.a) - excess(x.b) -
+           excess(x.p) - excess(x.q);
+  }
+  // The geometry: the new triangles (p, a, q) and (q, b, p) keep the side of `n` (the quad a q b p is convex seen
+  // along it) and are no slivers.
+  bool keepsShape(const Flip& x, const Vec3& n) const {
+    const Vec3 A = T_.V.row(x.a).transpose(), B = T_.V.row(x.b).transpose(), P = T_.V.row(x.p).transpose(),
+               Q = T_.V.row(x.q).transpose();
+    const double t1 = dot(cross(A - P, Q - P), n), t2 = dot(cross(Q - P, B - P), n);
+    const double scale = dot(Q - P, Q - P) + dot(A - B, A - B);
+    return t1 > 0.05 * scale && t2 > 0.05 * scale;
+  }
+  Vec3 centre(const Flip& x) const {
+    return 0.25 * (T_.V.row(x.a) + T_.V.row(x.b) + T_.V.row(x.p) + T_.V.row(x.q)).transpose();
+  }
+  // The normal of the two triangles the flip replaces (their area-weighted sum).
+  Vec3 quadNormal(const Flip& x) const {
+    const Vec3 A = T_.V.row(x.a).transpose(), B = T_.V.row(x.b).transpose(), P = T_.V.row(x.p).transpose(),
+               Q = T_.V.row(x.q).transpose();
+    return normalized(cross(B - A, P - A) + cross(A - B, Q - B));
+  }
+
+  // Triangle f becomes (p, a, q), triangle g becomes (q, b, p); a leaves g, b leaves f, p joins g, q f.
+  void apply(const Flip& x) {
+    T_.F.row(x.f) << x.p, x.a, x.q;
+    T_.F.row(x.g) << x.q, x.b, x.p;
+    leave(x.a, x.g), leave(x.b, x.f), around_[x.p].push_back(x.g), around_[x.q].push_back(x.f);
+    --valence_[x.a], --valence_[x.b], ++valence_[x.p], ++valence_[x.q];
+  }
+  // The flip taken back (the triangles' corners as they were: (a, b, p) and (b, a, q)).
+  void undo(const Flip& x) {
+    T_.F.row(x.f) << x.a, x.b, x.p;
+    T_.F.row(x.g) << x.b, x.a, x.q;
+    leave(x.p, x.g), leave(x.q, x.f), around_[x.a].push_back(x.g), around_[x.b].push_back(x.f);
+    ++valence_[x.a], ++valence_[x.b], --valence_[x.p], --valence_[x.q];
+  }
+
+ private:
+  void leave(int v, int f) { around_[v].erase(std::find(around_[v].begin(), around_[v].end(), f)); }
+  TriMesh& T_;
+  std::vector<std::vector<int>> around_;
+  std::vector<int> valence_;
+  std::vector<char> boundary_;
+};
+
+// Sequences of flips around an irregular vertex that leave the valences' sum of squared misses as it is (a dislocation,
+// a 5 next to a 7, moving a row along its glide line) and end in one that lowers it (two dislocations of opposite
+// sense meeting and cancelling, a dislocation joining a singular vertex): depth-first, `depth` flips at most, among
+// the edges of the triangles around the irregular vertices the last flip left, none touching the boundary; at most
+// `budget` flips tried in all. True when such a sequence was applied (it is in `done`).
+bool glideFrom(Flips& flips, const std::vector<int>& seeds, int depth, const Flips::Flip* last, int& budget,
+           std::vector<Flips::Flip>& done) {
+  // The edges of the triangles around the seeds, each once: (smaller end, larger end, triangle, corner).
+  std::vector<std::array<int, 4>> edges;
+  for (int s : seeds)
+    for (int f : flips.around(s))
+      for (int c = 0; c < 3; ++c) {
+        const int a = flips.corner(f, c), b = flips.corner(f, (c + 1) % 3);
+        edges.push_back({std::min(a, b), std::max(a, b), f, c});
+      }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end(),
+                          [](const auto& l, const auto& r) { return l[0] == r[0] && l[1] == r[1]; }),
+              edges.end());
+  for (const auto& e : edges) {
+    Flips::Flip x;
+    if (budget <= 0) return false;
+    if (!flips.flippable(e[2], e[3], x)) continue;
+    // Inside only: a dislocation glided into the boundary strains the boundary panels' rows (the uploaded bumps at
+    // 10k faces: a node 0.33 % of the diagonal off the surface, where inside only 0.02 %).
+    if (flips.onBoundary(x.a) || flips.onBoundary(x.b) || flips.onBoundary(x.p) || flips.onBoundary(x.q)) continue;
+    if (last && ((x.p == last->a && x.q == last->b) || (x.p == last->b && x.q == last->a))) continue;  // not back
+    const int delta = flips.change(x);
+    if (delta > 0 || (delta == 0 && depth <= 1)) continue;
+    if (!flips.keepsShape(x, flips.quadNormal(x))) continue;
+    --budget;
+    flips.apply(x);
+    done.push_back(x);
+    if (delta < 0) return true;
+    std::vector<int> next;
+    for (int v : {x.a, x.b, x.p, x.q})
+      if (flips.irregular(v)) next.push_back(v);
+    if (!next.empty() && glideFrom(flips, next, depth - 1, &x, budget, done)) return true;
+    done.pop_back();
+    flips.undo(x);
+  }
+  return false;
+}
+
+}  // namespace
+
+// Flips of a glide sequence at most, flips tried from one vertex at most, and rounds over the vertices.
+constexpr int kGlideDepth = 8, kGlideBudget = 2048, kGlideRounds = 4;
+
+int improveValences(TriMesh& T, const Surface& surface, bool glide, const CancelFlag* cancel) {
+  const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
+  if (nf == 0) return 0;
+  Flips flips(T);
+  int count = 0;
+  auto greedy = [&]() {
+    for (int pass = 0; pass < 8; ++pass) {
+      checkCancel(cancel);
+      int flipped = 0;
+      for (int f = 0; f < nf; ++f)
+        for (int c = 0; c < 3; ++c) {
+          Flips::Flip x;
+          if (T.F(f, c) > T.F(f, (c + 1) % 3) || !flips.flippable(f, c, x) || flips.change(x) >= 0) continue;
+          if (!flips.keepsShape(x, surface.closestPoint(flips.centre(x)).normal)) continue;
+          flips.apply(x);
+          ++flipped;
+        }
+      count += flipped;
+      if (flipped == 0) break;
+    }
+  };
+  greedy();
+  // Then dislocations glided together (kGlideDepth flips at most from each irregular vertex), and the greedy
+  // flips again where that left a lower sum within one flip.
+  for (int round = 0; glide && round < kGlideRounds; ++round) {
+    int glided = 0;
+    for (int v = 0; v < nv; ++v) {
+      if (v % 1024 == 0) checkCancel(cancel);
+      if (!flips.irregular(v) || flips.onBoundary(v)) continue;
+      std::vector<Flips::Flip> done;
+      int budget = kGlideBudget;
+      if (glideFrom(flips, {v}, kGlideDepth, nullptr, budget, done)) glided += static_cast<int>(done.size());
+    }
+    count += glided;
+    if (glided == 0) break;
+  }
+  if (glide) greedy();
+  return count;
 }
 
 }  // namespace phex::global
