@@ -821,4 +821,35 @@ TEST_CASE("global triangulation: dislocations of opposite sense glide together a
   CHECK(flips >= 2);
   CHECK(valenceExcess(T) == regular);
   CHECK(countEdges(T).bad == 0);
+
+  SECTION("a lattice scrambled by random flips: valences no worse, every triangle kept facing up") {
+    TriMesh scrambled;
+    scrambled.V = T.V;
+    scrambled.F = T.F;
+    std::uint32_t seed = 12345;
+    auto next = [&]() { return seed = seed * 1664525u + 1013904223u; };
+    for (int k = 0; k < 300; ++k) {
+      const std::vector<std::pair<int, int>> edges = interiorEdges(scrambled);
+      const auto [a, b] = edges[next() % edges.size()];
+      TriMesh trial = scrambled;
+      if (!flipEdge(trial, a, b)) continue;
+      bool up = true;
+      for (int f = 0; f < trial.F.rows(); ++f) {
+        const Vec3 p = trial.V.row(trial.F(f, 0)), q = trial.V.row(trial.F(f, 1)), r = trial.V.row(trial.F(f, 2));
+        up = up && (q - p).cross(r - p).z() > 0;
+      }
+      if (up && countEdges(trial).bad == 0) scrambled = trial;
+    }
+    const int before = valenceExcess(scrambled);
+    REQUIRE(before > regular + 40);  // well scrambled
+    global::improveValences(scrambled, plane, true, nullptr);
+    INFO("sum of squared misses " << before << " -> " << valenceExcess(scrambled) << " (regular " << regular << ")");
+    CHECK(valenceExcess(scrambled) < before);
+    CHECK(countEdges(scrambled).bad == 0);
+    for (int f = 0; f < scrambled.F.rows(); ++f) {
+      const Vec3 p = scrambled.V.row(scrambled.F(f, 0)), q = scrambled.V.row(scrambled.F(f, 1)),
+                 r = scrambled.V.row(scrambled.F(f, 2));
+      CHECK((q - p).cross(r - p).z() > 0);
+    }
+  }
 }

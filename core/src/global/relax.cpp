@@ -238,8 +238,9 @@ bool glideFrom(Flips& flips, const std::vector<int>& seeds, int depth, const Fli
 
 }  // namespace
 
-// Flips of a glide sequence at most, flips tried from one vertex at most, and rounds over the vertices.
-constexpr int kGlideDepth = 8, kGlideBudget = 2048, kGlideRounds = 4;
+// Flips of a glide sequence at most, flips tried from one vertex at most (the sweeps' searches tried 160-580 at most,
+// 11 on average), flips tried in all per vertex of the mesh, and rounds over the vertices.
+constexpr int kGlideDepth = 8, kGlideBudget = 2048, kGlideShare = 16, kGlideRounds = 4;
 
 int improveValences(TriMesh& T, const Surface& surface, bool glide, const CancelFlag* cancel) {
   const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
@@ -265,14 +266,18 @@ int improveValences(TriMesh& T, const Surface& surface, bool glide, const Cancel
   greedy();
   // Then dislocations glided together (kGlideDepth flips at most from each irregular vertex), and the greedy
   // flips again where that left a lower sum within one flip.
-  for (int round = 0; glide && round < kGlideRounds; ++round) {
+  // All the searches together try at most kGlideShare flips per vertex of the mesh (on the sweeps about one in all).
+  long long left = static_cast<long long>(kGlideShare) * nv;
+  for (int round = 0; glide && round < kGlideRounds && left > 0; ++round) {
     int glided = 0;
-    for (int v = 0; v < nv; ++v) {
+    for (int v = 0; v < nv && left > 0; ++v) {
       if (v % 1024 == 0) checkCancel(cancel);
       if (!flips.irregular(v) || flips.onBoundary(v)) continue;
       std::vector<Flips::Flip> done;
-      int budget = kGlideBudget;
-      if (glideFrom(flips, {v}, kGlideDepth, nullptr, budget, done)) glided += static_cast<int>(done.size());
+      const int budget = static_cast<int>(std::min<long long>(kGlideBudget, left));
+      int unused = budget;
+      if (glideFrom(flips, {v}, kGlideDepth, nullptr, unused, done)) glided += static_cast<int>(done.size());
+      left -= budget - unused;
     }
     count += glided;
     if (glided == 0) break;
