@@ -576,9 +576,9 @@ TEST_CASE("pipeline: a global solve that cut far more faces than its dual folds 
 }
 
 // The unguarded solve can leave a node far off where three planes pass through nearly one line (the surface fit
-// cannot move such a node): the bubble at 4000 faces (anisotropy 1.498) cut 20 faces unguarded against 117
-// guarded, but a node ended 0.77 % of the diagonal off. Put back on the surface and solved again, 0.09 %.
-// (Without the fairness; with it the solve with folds allowed converges with 2 interior faces cut.)
+// cannot move such a node): the bubble at 4000 faces (anisotropy 1.498) cut 20 faces unguarded against 119
+// guarded, but a node ended 0.77 % of the diagonal off. Put back on the surface and solved again, 0.08 %.
+// (Without the fairness; with it the guarded solve converges with 1 interior face cut.)
 TEST_CASE("pipeline: far nodes of the unguarded solve are put back on the surface and solved again") {
   const PipelineResult r = bubbleGlobal(4000, PipelineParams().alignment, 1.498, 0.0);
   checkSolvedNear(r);

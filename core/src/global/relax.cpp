@@ -102,6 +102,7 @@ class Flips {
  public:
   struct Flip {
     int f = -1, g = -1, a = -1, b = -1, p = -1, q = -1;
+    std::array<int, 3> rowF{}, rowG{};  // the two triangles' corners as they were, for undo
   };
 
   explicit Flips(TriMesh& T) : T_(T), around_(T.V.rows()), valence_(T.V.rows(), 0), boundary_(T.V.rows(), 0) {
@@ -142,7 +143,7 @@ class Flips {
     if (twin < 0) return false;
     const int g = twin / 3, q = T_.F(g, (twin % 3 + 2) % 3);
     if (p == q || valence_[a] <= 3 || valence_[b] <= 3 || halfEdge(p, q) >= 0 || halfEdge(q, p) >= 0) return false;
-    out = {f, g, a, b, p, q};
+    out = {f, g, a, b, p, q, {T_.F(f, 0), T_.F(f, 1), T_.F(f, 2)}, {T_.F(g, 0), T_.F(g, 1), T_.F(g, 2)}};
     return true;
   }
   // How the flip changes the sum of squared misses.
@@ -176,10 +177,11 @@ class Flips {
     leave(x.a, x.g), leave(x.b, x.f), around_[x.p].push_back(x.g), around_[x.q].push_back(x.f);
     --valence_[x.a], --valence_[x.b], ++valence_[x.p], ++valence_[x.q];
   }
-  // The flip taken back (the triangles' corners as they were: (a, b, p) and (b, a, q)).
+  // The flip taken back, the triangles' corners in their order as they were (the searches hold triangles and
+  // corners from before it).
   void undo(const Flip& x) {
-    T_.F.row(x.f) << x.a, x.b, x.p;
-    T_.F.row(x.g) << x.b, x.a, x.q;
+    T_.F.row(x.f) << x.rowF[0], x.rowF[1], x.rowF[2];
+    T_.F.row(x.g) << x.rowG[0], x.rowG[1], x.rowG[2];
     leave(x.p, x.g), leave(x.q, x.f), around_[x.a].push_back(x.g), around_[x.b].push_back(x.f);
     ++valence_[x.a], ++valence_[x.b], --valence_[x.p], --valence_[x.q];
   }
