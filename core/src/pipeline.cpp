@@ -713,26 +713,27 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
 
 namespace {
 
-// The solver's options as the run's parameters ask for them, on `surface`.
-PlanarizeOptions planarizeOptions(const PipelineParams& params, const Surface& surface) {
-  PlanarizeOptions po;
-  po.method = params.solver;
-  po.lambda = params.lambda;
-  po.mu = params.mu;
-  po.tolerance = params.tolerance;
-  po.maxIterations = params.maxIterations;
-  po.preventFolds = params.preventFolds;
-  po.fitSurface = params.fitSurface;
-  po.surface = &surface;
-  return po;
-}
-
 // The local solver's fairness for `method` on `surface` (PipelineParams::fairness): the global method's solves, but
 // not on a noisy upload. The paper's methods lay rows whose duals their figures were measured without it. On the
 // noisy shared models it turned stalls into convergence by cutting many faces (3holes at 3000 faces: 4 -> 48 cut,
 // 88.6 -> 78.9 % hexagons; six_s0 at 5000: 9 -> 406; METHOD.md), which is not the trade asked for.
 double fairnessFor(const PipelineParams& params, TriangulationMethod method, const Surface& surface) {
   return method == TriangulationMethod::Global && !noisyUpload(surface) ? params.fairness : 0.0;
+}
+
+// The solver's options as the run's parameters ask for them, for a triangulation laid by `method` on `surface`.
+PlanarizeOptions planarizeOptions(const PipelineParams& params, TriangulationMethod method, const Surface& surface) {
+  PlanarizeOptions po;
+  po.method = params.solver;
+  po.lambda = params.lambda;
+  po.mu = params.mu;
+  po.fairness = fairnessFor(params, method, surface);
+  po.tolerance = params.tolerance;
+  po.maxIterations = params.maxIterations;
+  po.preventFolds = params.preventFolds;
+  po.fitSurface = params.fitSurface;
+  po.surface = &surface;
+  return po;
 }
 
 // Rounds of changes against the faces a solve could make planar only by folding (flipFoldsAway).
@@ -777,9 +778,8 @@ struct FoldFlips {
 };
 FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const PipelineParams& params, const ProgressFn& progress,
                         const CancelFlag* cancel, std::optional<DualMesh>& keptDual) {
-  PlanarizeOptions po = planarizeOptions(params, surface);
+  PlanarizeOptions po = planarizeOptions(params, TriangulationMethod::Global, surface);
   po.method = PlanarizeMethod::LocalGlobal;  // folds allowed, no fit: only which faces fold is asked
-  po.fairness = fairnessFor(params, TriangulationMethod::Global, surface);
   po.preventFolds = false;
   po.fitSurface = false;
   Triangulation best = t;
@@ -1701,8 +1701,7 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
   const Surface& surface = *r.surface;
   clock.done("triangulate");
 
-  PlanarizeOptions po = planarizeOptions(params, surface);
-  po.fairness = fairnessFor(params, r.method, surface);
+  PlanarizeOptions po = planarizeOptions(params, r.method, surface);
   // The global method's lattice has no seams, but where the solve leaves faces off planar (next to parabolic curves
   // and the lattice's defects, §7) they are cut as on seams, within the same budget: on the shared models the
   // few-faces rule left the solve stalled at 1e-2 with hundreds of faces just off planar.
@@ -1828,6 +1827,12 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
     if (po.fitSurface && x.solve.converged) return x.solve.surfaceDistanceAfter;  // planarize measured it
     return diagonal > 0 ? largestSurfaceDistance(x.hex, surface) / diagonal : 0.0;
   };
+  // A solve with folds allowed from `duality`'s dual (the run's options otherwise).
+  auto solveUnguarded = [&](PipelineResult& x, Duality duality) {
+    po.preventFolds = false;
+    solveFrom(x, duality, dualOf(duality));
+    po.preventFolds = true;
+  };
   bool settled = false;
   // The solve with folds allowed from the Dupin dual where it did not stand: the unguarded solve below, from the
   // same dual with the same options, is this one (the bench's upload at 100k faces: planarize 17.1 -> 13.9 s, the
@@ -1836,9 +1841,7 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
   if (r.method == TriangulationMethod::Global && po.fairness > 0 && params.preventFolds &&
       params.solver == PlanarizeMethod::LocalGlobal && params.duality == Duality::Auto) {
     PipelineResult t;
-    po.preventFolds = false;
-    solveFrom(t, Duality::Dupin, dualOf(Duality::Dupin));
-    po.preventFolds = true;
+    solveUnguarded(t, Duality::Dupin);
     if (t.solve.converged && crossing(t.hex) == 0 &&
         static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare && offSurface(t) <= kSurfaceDistanceGoal) {
       takeSolve(std::move(t));
@@ -1958,11 +1961,9 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
                         (r.interiorFacesSplit > kManyCutsRatio * stageDual.folded + kManyCutsMore ||
                          r.boundaryPanelsSplit > kManyPanelsCut * double(boundaryFaces));
   if (!settled && (!r.solve.converged || manyCuts) && params.preventFolds && params.solver == PlanarizeMethod::LocalGlobal) {
-    po.preventFolds = false;
     PipelineResult t;
     if (asked == Duality::Dupin && unguardedDupin) t = std::move(*unguardedDupin);
-    else solveFrom(t, asked, dualOf(asked));
-    po.preventFolds = true;
+    else solveUnguarded(t, asked);
     bool keep = t.solve.converged && crossing(t.hex) == 0;
     if (keep && manyCuts) {
       keep = nodesOfFourCut(t) < nodesOfFourCut(r);

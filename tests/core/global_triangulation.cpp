@@ -726,23 +726,23 @@ TEST_CASE("pipeline: the solver's fairness cuts fewer faces on a clean upload, a
 
 namespace {
 
-// Valences of a triangle mesh's vertices, and whether each is on the boundary.
-std::pair<std::vector<int>, std::vector<char>> valences(const TriMesh& T) {
+// The half-edges of a triangle mesh, as (from, to).
+std::set<std::pair<int, int>> directedEdges(const TriMesh& T) {
   std::set<std::pair<int, int>> directed;
   for (int f = 0; f < T.F.rows(); ++f)
     for (int k = 0; k < 3; ++k) directed.insert({T.F(f, k), T.F(f, (k + 1) % 3)});
+  return directed;
+}
+
+// The sum of squared misses of valence 6 (4 on the boundary), as improveValences counts it.
+int valenceExcess(const TriMesh& T) {
+  const std::set<std::pair<int, int>> directed = directedEdges(T);
   std::vector<int> valence(T.V.rows(), 0);
   std::vector<char> boundary(T.V.rows(), 0);
   for (const auto& [a, b] : directed) {
     if (!directed.count({b, a})) boundary[a] = boundary[b] = 1, ++valence[a], ++valence[b];
     else if (a < b) ++valence[a], ++valence[b];
   }
-  return {valence, boundary};
-}
-
-// The sum of squared misses of valence 6 (4 on the boundary), as improveValences counts it.
-int valenceExcess(const TriMesh& T) {
-  const auto [valence, boundary] = valences(T);
   int sum = 0;
   for (std::size_t v = 0; v < valence.size(); ++v) {
     const int d = valence[v] - (boundary[v] ? 4 : 6);
@@ -768,9 +768,7 @@ bool flipEdge(TriMesh& T, int a, int b) {
 
 // The interior edges of T, each once.
 std::vector<std::pair<int, int>> interiorEdges(const TriMesh& T) {
-  std::set<std::pair<int, int>> directed;
-  for (int f = 0; f < T.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) directed.insert({T.F(f, k), T.F(f, (k + 1) % 3)});
+  const std::set<std::pair<int, int>> directed = directedEdges(T);
   std::vector<std::pair<int, int>> edges;
   for (const auto& [a, b] : directed)
     if (a < b && directed.count({b, a})) edges.push_back({a, b});
