@@ -8,6 +8,7 @@
 #include "phex/mesh_surface.hpp"
 #include "phex/error.hpp"
 #include "phex/metrics.hpp"
+#include "phex/parallel.hpp"
 
 namespace phex {
 
@@ -277,11 +278,21 @@ int untangleDual(DualMesh& dual, const TriMesh& T, const std::vector<LocalGeomet
     for (int f : facesAt[i]) n += faceSelfIntersects(M, f);
     return n;
   };
+  // Which faces cross themselves as a sweep starts, over threads; in the sweep a face with a corner moved since is
+  // measured again (so the sweep sees what measuring every face in turn would see).
+  std::vector<char> crossed(nfd, 0), touched(nvd, 0);
   int moved = 0;
   for (int sweep = 0; sweep < 4; ++sweep) {
     int changed = 0;
+    parallelRanges(nfd, kPointsPerThread, [&](int begin, int end) {
+      for (int f = begin; f < end; ++f) crossed[f] = !dual.boundaryFace[f] && faceSelfIntersects(M, f);
+    });
+    std::fill(touched.begin(), touched.end(), char(0));
     for (int f = 0; f < nfd; ++f) {
-      if (dual.boundaryFace[f] || !faceSelfIntersects(M, f)) continue;
+      if (dual.boundaryFace[f]) continue;
+      bool dirty = false;
+      for (int k = 0; k < M.faceSize(f) && !dirty; ++k) dirty = touched[M.face(f)[k]];
+      if (!(dirty ? faceSelfIntersects(M, f) : crossed[f])) continue;
       for (int k = 0; k < M.faceSize(f); ++k) {
         const int i = M.face(f)[k], t = dual.vertexTriangle[i];
         if (t < 0) continue;
@@ -302,7 +313,7 @@ int untangleDual(DualMesh& dual, const TriMesh& T, const std::vector<LocalGeomet
           if (crossing < best) best = crossing, bestPoint = candidates[c];
         }
         M.V.row(i) = bestPoint.transpose();
-        if (bestPoint != now) ++changed;
+        if (bestPoint != now) ++changed, touched[i] = 1;
         if (!faceSelfIntersects(M, f)) break;
       }
     }
@@ -541,13 +552,16 @@ DualMesh dualWith(const Triangulation& tri, const Surface& surface, Place place,
   const bool rulings = shareRulingPlanes(T, geo, mesh && mesh->developable()) > 0;
   const VertexRings rings = vertexRings(T);
   Points U(nf, 3);
-  int fallbacks = 0;
-  for (int f = 0; f < nf; ++f) {
-    const TriangleFrame fr = frameOf(geo, T, f);
-    Vec3 x = fr.centroid;
-    fallbacks += !place(geo, f, fr, x);
-    U.row(f) = x.transpose();
-  }
+  std::vector<char> fellBack(nf, 0);  // each triangle on its own, over threads
+  parallelRanges(nf, kPointsPerThread, [&](int begin, int end) {
+    for (int f = begin; f < end; ++f) {
+      const TriangleFrame fr = frameOf(geo, T, f);
+      Vec3 x = fr.centroid;
+      fellBack[f] = !place(geo, f, fr, x);
+      U.row(f) = x.transpose();
+    }
+  });
+  const int fallbacks = static_cast<int>(std::count(fellBack.begin(), fellBack.end(), char(1)));
   keepWithinBoundary(T, rings, geo, U, surface, rulings);
   DualMesh dual = assembleDual(T, rings, U, geo, surface, fallbacks);
   if (untangle) dual.untangled = untangleDual(dual, T, geo);

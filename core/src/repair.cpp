@@ -12,6 +12,7 @@
 #include "phex/duality.hpp"
 #include "phex/dupin.hpp"
 #include "phex/ideal_triangle.hpp"
+#include "phex/parallel.hpp"
 #include "phex/triangulation.hpp"
 
 namespace phex {
@@ -65,10 +66,12 @@ class Repair {
     for (int v = 0; v < nv; ++v)
       cacheStart_[v + 1] = cacheStart_[v] + (checkable_[v] ? static_cast<int>(rings_.triangles[v].size()) : 0);
     cache_.resize(cacheStart_[nv]);
-    for (int v = 0; v < nv; ++v)
-      if (checkable_[v])
-        for (std::size_t i = 0; i < rings_.triangles[v].size(); ++i)
-          cache_[cacheStart_[v] + i] = starTriangle(v, rings_.triangles[v][i]);
+    parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {  // each entry on its own
+      for (int v = begin; v < end; ++v)
+        if (checkable_[v])
+          for (std::size_t i = 0; i < rings_.triangles[v].size(); ++i)
+            cache_[cacheStart_[v] + i] = starTriangle(v, rings_.triangles[v][i]);
+    });
   }
 
   bool invalid(int v) const {
@@ -474,6 +477,10 @@ int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo) 
   auto attach = [&](int f) {
     for (int k = 0; k < 3; ++k) incident[T.F(f, k)].push_back(f), judged[T.F(f, k)] = -1;
   };
+  // Every vertex judged once before the first sweep, over threads (a judgement reads the mesh alone).
+  parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
+    for (int v = begin; v < end; ++v) judged[v] = judge(v);
+  });
   int flipped = 0;
   for (int sweep = 0; sweep < 4; ++sweep) {
     std::vector<int> bad;
