@@ -24,8 +24,10 @@ constexpr double kMergeSites = 0.5;
 // Boundary sites: no two closer than kBoundaryMin cells along the boundary; a gap over kBoundaryGap cells gets
 // sites in between.
 constexpr double kBoundaryMin = 0.5, kBoundaryGap = 1.4;
-// A boundary turning by more than this (degrees, over about a third of a cell on either side) is a corner: a site.
+// A boundary turning by more than this (degrees) over about a third of a cell (kCornerReach) on either side, and over
+// a cell (kCornerSpan), is a corner: a site.
 constexpr double kCornerTurn = 1 - 0.76604444311897801;  // 1 - cos 40 degrees
+constexpr double kCornerReach = 0.33, kCornerSpan = 1.0;
 // A region reaching farther than this from its site (cells) has a lattice point missing: a site is added there.
 constexpr double kFarInRegion = 1.0;
 // An interior site whose region touches the boundary is dropped when nearer to it than this (cells).
@@ -189,18 +191,23 @@ class Extractor {
       std::vector<Candidate> candidates;
       // Corners: the direction over about a third of a cell on either side turns by more than kCornerDegrees, and
       // more than at the neighbours.
-      std::vector<double> turn(n, 0.0);
-      for (int i = 0; i < n; ++i) {
+      // The turn over `reach` cells on either side of loop vertex i.
+      auto turnAt = [&](int i, double reach) {
         int back = i, ahead = i;
-        for (int k = 0; k < n / 2 && arcBetween(s, L, back, i) < 0.33; ++k) back = (back + n - 1) % n;
-        for (int k = 0; k < n / 2 && arcBetween(s, L, i, ahead) < 0.33; ++k) ahead = (ahead + 1) % n;
+        for (int k = 0; k < n / 2 && arcBetween(s, L, back, i) < reach; ++k) back = (back + n - 1) % n;
+        for (int k = 0; k < n / 2 && arcBetween(s, L, i, ahead) < reach; ++k) ahead = (ahead + 1) % n;
         const Vec3& nn = m_.frame[loop[i]].n;
         const Vec3 a = normalized(tangential(m_.point(loop[i]) - m_.point(loop[back]), nn));
         const Vec3 b = normalized(tangential(m_.point(loop[ahead]) - m_.point(loop[i]), nn));
-        turn[i] = 1 - dot(a, b);  // grows with the angle (no libm: the same bits in every build)
-      }
+        return 1 - dot(a, b);  // grows with the angle (no libm: the same bits in every build)
+      };
+      std::vector<double> turn(n, 0.0);
+      for (int i = 0; i < n; ++i) turn[i] = turnAt(i, kCornerReach);
+      // A corner turns over a cell on either side too: a jagged boundary (an upload's rows ending in a zigzag, each
+      // of its vertices turning 60 degrees) turns at every vertex over a third of a cell and not at all over a cell.
       for (int i = 0; i < n; ++i)
-        if (turn[i] > kCornerTurn && turn[i] >= turn[(i + n - 1) % n] && turn[i] > turn[(i + 1) % n])
+        if (turn[i] > kCornerTurn && turn[i] >= turn[(i + n - 1) % n] && turn[i] > turn[(i + 1) % n] &&
+            turnAt(i, kCornerSpan) > kCornerTurn)
           candidates.push_back({s[i], 2});
       // The lattice's points on the boundary: per cluster with boundary vertices, its vertex nearest the point,
       // moved along the tangent to the point.
