@@ -481,6 +481,19 @@ int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo) 
   parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
     for (int v = begin; v < end; ++v) judged[v] = judge(v);
   });
+  // The sweep in which a flip last changed each vertex's triangles (-1: none). A flip around v is judged by the
+  // triangles of vertices within two edges of v alone: where none of them changed since the sweep before, which
+  // tried every flip around v and took none, this one would take none either (most invalid stars resist flips:
+  // on the bumps upload at 10k faces about 470, each sweep after the first took 7-9 ms for none).
+  std::vector<int> changedIn(nv, -1);
+  auto changedNear = [&](int v, int since) {
+    for (int f : incident[v])
+      for (int k = 0; k < 3; ++k)
+        for (int g : incident[T.F(f, k)])
+          for (int j = 0; j < 3; ++j)
+            if (changedIn[T.F(g, j)] >= since) return true;
+    return false;
+  };
   int flipped = 0;
   for (int sweep = 0; sweep < 4; ++sweep) {
     std::vector<int> bad;
@@ -489,6 +502,7 @@ int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo) 
     int flips = 0;
     for (int v : bad) {
       if (failing(v) == 0) continue;  // a flip at a neighbour made it valid
+      if (sweep > 0 && !changedNear(v, sweep - 1)) continue;
       bool again = true;
       while (again) {
         again = false;
@@ -526,6 +540,7 @@ int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo) 
             }
             if (starsAfter < starsBefore || (starsAfter == starsBefore && trianglesAfter < trianglesBefore)) {
               ++flips;
+              for (int c : corners) changedIn[c] = sweep;
               again = failing(v) > 0;  // v's fan changed: look at it afresh
               break;
             }
