@@ -1,6 +1,8 @@
 // phex — threads for work that splits into independent parts (native builds; WebAssembly runs them in turn).
 #pragma once
+#include <algorithm>
 #include <functional>
+#include <vector>
 
 namespace phex {
 
@@ -25,5 +27,24 @@ void parallelRanges(int n, int grain, const std::function<void(int begin, int en
 // task(i) for i in [0, n), each item taken by the next free thread: for a few large items of unequal cost
 // (trial lays). Waits for all; then rethrows the exception of the lowest item that threw.
 void parallelTasks(int n, const std::function<void(int i)>& task);
+
+// std::sort(begin, end, less) over threads: the range cut into threadCount() parts sorted at once (parallelTasks),
+// then merged pairwise. Where `less` orders every two distinct items (no ties), the result is std::sort's.
+template <typename It, typename Less>
+void parallelSort(It begin, It end, Less less) {
+  const long n = static_cast<long>(end - begin);
+  int parts = threadCount();
+  while (parts > 1 && n < 4096L * parts) --parts;  // small ranges stay on one thread
+  if (parts <= 1) {
+    std::sort(begin, end, less);
+    return;
+  }
+  std::vector<It> cut(parts + 1);
+  for (int k = 0; k <= parts; ++k) cut[k] = begin + n * k / parts;
+  parallelTasks(parts, [&](int k) { std::sort(cut[k], cut[k + 1], less); });
+  for (int width = 1; width < parts; width *= 2)
+    for (int k = 0; k + width < parts; k += 2 * width)
+      std::inplace_merge(cut[k], cut[k + width], cut[std::min(k + 2 * width, parts)], less);
+}
 
 }  // namespace phex

@@ -13,6 +13,7 @@
 
 #include "global.hpp"
 #include "phex/error.hpp"
+#include "phex/parallel.hpp"
 
 namespace phex::global {
 namespace {
@@ -172,7 +173,9 @@ class Extractor {
       const double d = (m_.point(v) - sites_[s].p).squaredNorm();
       if (d < best[s]) best[s] = d, sites_[s].seed = v;
     }
-    for (Site& s : sites_) s.p = surface_.closestPoint(s.p).point;
+    parallelRanges(static_cast<int>(sites_.size()), kPointsPerThread, [&](int begin, int end) {
+      for (int i = begin; i < end; ++i) sites_[i].p = surface_.closestPoint(sites_[i].p).point;
+    });
   }
 
   // Sites along every boundary loop: at its corners, at the lattice's points on it, and in the gaps between.
@@ -285,13 +288,26 @@ class Extractor {
   // Every fine vertex to its nearest site (in the Dupin metric, in cells), regions grown from the seeds outwards.
   void label() {
     const int nv = m_.vertexCount();
+    // cells(d, v) as the length of (a . d, b . d): the Dupin frame's axes scaled by sigma and 1 / sigma, over the
+    // cell there (the frame's axes are tangent: d's normal part drops out).
+    if (static_cast<int>(axes_.size()) != nv) {
+      axes_.resize(nv);
+      for (int v = 0; v < nv; ++v) {
+        const Frame& f = m_.frame[v];
+        axes_[v] = {f.sigma / h(v) * f.t, f.b() / (f.sigma * h(v))};
+      }
+    }
+    auto cellsTo = [&](const Vec3& d, int v) {
+      const double a = dot(axes_[v][0], d), b = dot(axes_[v][1], d);
+      return std::sqrt(a * a + b * b);
+    };
     label_.assign(nv, -1);
     dist_.assign(nv, std::numeric_limits<double>::infinity());
     using Entry = std::pair<double, int>;
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
     for (int s = 0; s < static_cast<int>(sites_.size()); ++s) {
       const int v = sites_[s].seed;
-      const double d = cells(m_.point(v) - sites_[s].p, v);
+      const double d = cellsTo(m_.point(v) - sites_[s].p, v);
       if (d < dist_[v] || (d == dist_[v] && s < label_[v])) dist_[v] = d, label_[v] = s;
     }
     for (int v = 0; v < nv; ++v)
@@ -304,7 +320,7 @@ class Extractor {
         const int u = m_.adjacent[i];
         // The distance to the site itself (not along the mesh): the regions' borders then lie where the sites'
         // own Voronoi regions' do, to within a fine edge, and each region stays connected (grown from its seed).
-        const double du = cells(m_.point(u) - sites_[label_[v]].p, u);
+        const double du = cellsTo(m_.point(u) - sites_[label_[v]].p, u);
         if (du < dist_[u]) dist_[u] = du, label_[u] = label_[v], queue.push({du, u});
       }
     }
@@ -516,6 +532,7 @@ class Extractor {
   std::vector<Site> sites_;
   std::vector<int> clusterOf_;
   std::vector<char> clusterHasBoundary_;
+  std::vector<std::array<Vec3, 2>> axes_;  // per fine vertex, for label()
   std::vector<int> label_, siteOf_;
   std::vector<double> dist_;
   std::vector<std::string> notes_;

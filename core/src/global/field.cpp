@@ -92,7 +92,7 @@ Level coarsen(const Level& fine) {
       const double score = dot(fine.frame[i].n, fine.frame[j].n) / (fine.area[i] + fine.area[j]);
       edges.push_back({score, i, j});
     }
-  std::sort(edges.begin(), edges.end(), [](const Edge& a, const Edge& b) {
+  parallelSort(edges.begin(), edges.end(), [](const Edge& a, const Edge& b) {  // no ties: (i, j) is unique
     return a.score != b.score ? a.score > b.score : a.i != b.i ? a.i < b.i : a.j < b.j;
   });
   std::vector<int> mate(n, -1);
@@ -130,30 +130,32 @@ Level coarsen(const Level& fine) {
     };
     return Range{childList.data() + childStart[c], childList.data() + childStart[c + 1]};
   };
-  std::vector<const Frame*> frames;
-  std::vector<double> weights;
-  for (int c = 0; c < m; ++c) {
-    frames.clear(), weights.clear();
-    double area = 0;
-    Vec3 x = Vec3::Zero();
-    for (int i : children(c)) {
-      frames.push_back(&fine.frame[i]);
-      weights.push_back(fine.area[i]);
-      area += fine.area[i];
-      x += fine.area[i] * fine.x[i];
+  parallelRanges(m, kSweepGrain, [&](int begin, int end) {  // each coarse vertex on its own
+    std::vector<const Frame*> frames;
+    std::vector<double> weights;
+    for (int c = begin; c < end; ++c) {
+      frames.clear(), weights.clear();
+      double area = 0;
+      Vec3 x = Vec3::Zero();
+      for (int i : children(c)) {
+        frames.push_back(&fine.frame[i]);
+        weights.push_back(fine.area[i]);
+        area += fine.area[i];
+        x += fine.area[i] * fine.x[i];
+      }
+      coarse.area[c] = area;
+      coarse.x[c] = area > 0 ? Vec3(x / area) : fine.x[*children(c).begin()];
+      coarse.frame[c] = averageFrame(frames, weights);
+      for (int i : children(c)) {
+        coarse.alignWeight[c] += fine.area[i] * fine.alignWeight[i] / std::max(area, 1e-300);
+        coarse.scale[c] += fine.area[i] * fine.scale[i] / std::max(area, 1e-300);
+        if (fine.fixed[i] && !coarse.fixed[c]) coarse.fixed[c] = 1, coarse.target[c] = fine.target[i];
+      }
+      if (!coarse.fixed[c]) coarse.target[c] = coarse.frame[c].t;
+      coarse.target[c] = normalized(tangential(coarse.target[c], coarse.frame[c].n));
+      if (!(norm(coarse.target[c]) > 0.5)) coarse.target[c] = coarse.frame[c].t, coarse.fixed[c] = 0;
     }
-    coarse.area[c] = area;
-    coarse.x[c] = area > 0 ? Vec3(x / area) : fine.x[*children(c).begin()];
-    coarse.frame[c] = averageFrame(frames, weights);
-    for (int i : children(c)) {
-      coarse.alignWeight[c] += fine.area[i] * fine.alignWeight[i] / std::max(area, 1e-300);
-      coarse.scale[c] += fine.area[i] * fine.scale[i] / std::max(area, 1e-300);
-      if (fine.fixed[i] && !coarse.fixed[c]) coarse.fixed[c] = 1, coarse.target[c] = fine.target[i];
-    }
-    if (!coarse.fixed[c]) coarse.target[c] = coarse.frame[c].t;
-    coarse.target[c] = normalized(tangential(coarse.target[c], coarse.frame[c].n));
-    if (!(norm(coarse.target[c]) > 0.5)) coarse.target[c] = coarse.frame[c].t, coarse.fixed[c] = 0;
-  }
+  });
   // Adjacency: the children's, mapped (each coarse vertex's row gathered from its children's, sorted, unique).
   coarse.start.assign(m + 1, 0);
   std::vector<int> row;
