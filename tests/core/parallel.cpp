@@ -1,7 +1,9 @@
 #include <catch.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <stdexcept>
 #include <vector>
 
@@ -86,6 +88,27 @@ TEST_CASE("parallel: ranges and tasks cover every item once, whatever the thread
     bool once = true;
     for (auto& c : inner) once = once && c == 1;
     CHECK(once);
+  }
+}
+
+// parallelSort cuts the range into threadCount() parts, sorts them at once and merges them: with a comparator that
+// orders every two distinct items it gives std::sort's order, on every thread count and for sizes that do not split
+// evenly (and ranges too small to split at all).
+TEST_CASE("parallel: parallelSort orders as std::sort does") {
+  std::uint64_t state = 12345;
+  auto next = [&] { return state = state * 6364136223846793005ULL + 1442695040888963407ULL; };
+  for (int n : {0, 1, 4095, 9000, 50001}) {
+    std::vector<std::pair<int, int>> items(n);
+    for (int i = 0; i < n; ++i) items[i] = {static_cast<int>(next() >> 60), i};  // many equal firsts, unique pairs
+    std::vector<std::pair<int, int>> expected = items;
+    std::sort(expected.begin(), expected.end(), std::greater<>());
+    for (int threads : {1, 2, 3, 8}) {
+      Threads scope(threads);
+      std::vector<std::pair<int, int>> sorted = items;
+      parallelSort(sorted.begin(), sorted.end(), std::greater<>());
+      INFO(n << " items on " << threads << " threads");
+      CHECK(sorted == expected);
+    }
   }
 }
 
