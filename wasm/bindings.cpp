@@ -130,6 +130,7 @@ phex::PipelineParams paramsFromJs(const val& o) {
   if (has(o, "curvatureFloor")) p.curvatureFloor = number(o, "curvatureFloor");
   if (has(o, "relay")) p.relay = switchValue(o, "relay", "on", "off");
   if (has(o, "fairness")) p.fairness = number(o, "fairness");
+  if (has(o, "cutShare")) p.cutShare = number(o, "cutShare");
   return p;
 }
 

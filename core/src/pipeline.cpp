@@ -306,6 +306,7 @@ void validate(const PipelineParams& p) {
   if (!(p.lambda >= 0 && p.lambda <= 1e6)) fail("lambda must be in [0, 1e6] (got " + number(p.lambda) + ")");
   if (!(p.mu >= 0 && p.mu <= 1e6)) fail("mu must be in [0, 1e6] (got " + number(p.mu) + ")");
   if (!(p.fairness >= 0 && p.fairness <= 1)) fail("fairness must be in [0, 1] (got " + number(p.fairness) + ")");
+  if (!(p.cutShare >= 0 && p.cutShare <= 1)) fail("cutShare must be in [0, 1] (got " + number(p.cutShare) + ")");
   if (p.maxIterations < 1 || p.maxIterations > 10000)
     fail("maxIterations must be between 1 and 10000 (got " + std::to_string(p.maxIterations) + ")");
   if (!(p.lowerBound >= 0 && p.lowerBound <= 2)) fail("lowerBound must be in [0, 2] (got " + number(p.lowerBound) + ")");
@@ -1545,11 +1546,13 @@ constexpr int kSeamRounds = 4;
 // faces, 13 invalid stars left by the coarse lay) stalled at 9e-5 with 19 of its faces off planar; cut,
 // it converges. (A solve stopped by the cap is only slow there: it keeps the few-faces rule.)
 constexpr std::size_t kStalledShare = 20;
-// On seams, every face left off planar is cut as long as all the cuts together stay within one in kSeamShare
-// of the faces (the bumps cut 2-4 %). Method 1 forced onto a cone laid two systems of layers whose Dupin dual
-// no solve could make planar: without the budget four rounds cut 5676 interior faces of 5420, cutting the
+// On seams, every face left off planar is cut as long as all the cuts together stay within PipelineParams::cutShare
+// of the faces (default a tenth; the bumps cut 2-4 %). Method 1 forced onto a cone laid two systems of layers whose
+// Dupin dual no solve could make planar: without the budget four rounds cut 5676 interior faces of 5420, cutting the
 // pieces again, and left a mesh of 6883 triangles.
-constexpr std::size_t kSeamShare = 10;
+std::size_t cutBudget(std::size_t uncut, double share) {
+  return static_cast<std::size_t>(std::floor(static_cast<double>(uncut) * share + 1e-9));  // a tenth: uncut / 10
+}
 // Of two solves from the two duals that both stopped short of the tolerance, the one with fewer interior faces
 // cut is kept where the counts differ by more than one face in this many; else the one nearer planar. Kept by
 // planarity alone, the tangent dual's solve won on four of the five shared models the global method tiles
@@ -1576,7 +1579,8 @@ struct PanelCut {
 std::size_t facesBeforeCuts(const PipelineResult& r) {
   return static_cast<std::size_t>(r.hex.faceCount() - r.interiorFacesSplit - r.boundaryPanelsSplit);
 }
-PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingOnly, bool seams, bool stalled) {
+PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingOnly, bool seams, bool stalled,
+                             double cutShare) {
   // The faces before any cut, and the interior faces cut so far: the seams' and the stall's cuts are budgeted
   // over all rounds together.
   const std::size_t uncut = facesBeforeCuts(r);
@@ -1611,7 +1615,7 @@ PanelCut splitBoundaryPanels(PipelineResult& r, double tolerance, bool crossingO
   int interior = 0;
   bool stalledRule = false;
   const std::size_t fewOff = std::max(kFewInteriorOff, static_cast<std::size_t>(r.hex.faceCount()) / kFewInteriorShare);
-  const bool few = (seams && cutSoFar + interiorOff.size() <= uncut / kSeamShare) || interiorOff.size() <= fewOff ||
+  const bool few = (seams && cutSoFar + interiorOff.size() <= cutBudget(uncut, cutShare)) || interiorOff.size() <= fewOff ||
                    (stalled && cutSoFar + interiorOff.size() <= uncut / kStalledShare);
   if (crossingOnly || (away && !few)) {  // only the crossing panels (and faces)
     count = 0;
@@ -1782,7 +1786,7 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
     auto stalled = [&] { return !x.solve.converged && lastSolve < po.maxIterations; };
     const int last = seams || stalled() ? kSeamRounds : 2;
     for (int round = 0; round <= last && params.splitBoundaryPanels; ++round) {
-      const PanelCut cut = splitBoundaryPanels(x, po.tolerance, round == last, seams, stalled());
+      const PanelCut cut = splitBoundaryPanels(x, po.tolerance, round == last, seams, stalled(), params.cutShare);
       x.boundaryPanelsSplit += cut.panels;
       x.interiorFacesSplit += cut.interior;
       stalledCuts = stalledCuts || cut.stalledRule;
@@ -1790,7 +1794,7 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
         // The pieces of a face cut for crossing itself may cross themselves still (no diagonal of it left
         // both simple): they are cut again, down to triangles at worst, which cannot.
         for (int again = 0; again < 3 && crossing(x.hex) > 0; ++again) {
-          const PanelCut more = splitBoundaryPanels(x, po.tolerance, true, seams, false);
+          const PanelCut more = splitBoundaryPanels(x, po.tolerance, true, seams, false, params.cutShare);
           x.boundaryPanelsSplit += more.panels;
           x.interiorFacesSplit += more.interior;
           if (more.panels + more.interior == 0) break;
@@ -1905,7 +1909,7 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
     solveUnguarded(t, Duality::Dupin);
     auto stands = [&](const PipelineResult& x) {
       return x.solve.converged && crossing(x.hex) == 0 &&
-             static_cast<std::size_t>(x.interiorFacesSplit) <= facesBeforeCuts(x) / kSeamShare;
+             static_cast<std::size_t>(x.interiorFacesSplit) <= cutBudget(facesBeforeCuts(x), params.cutShare);
     };
     // Where it stands but for a few nodes past the distance goal (three planes through nearly one line), those are
     // put back on the surface and solved again from there, as a converged result is below, and kept where that
@@ -1991,7 +1995,7 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
   // through such a shape on their way to planar ones. Method 1 on a cyclide patch past its parabolic circles
   // (uSpan 180, vSpan 260, 1500 faces: the test) stalls from both duals; unguarded it converges to 3e-13
   // with none crossing itself (73 interior faces cut, 1568 faces in all). Kept only then, and where the faces it cut
-  // (every one that folded) stay within one in kSeamShare (`foldsAllowed`); else the guarded result stands,
+  // (every one that folded) stay within PipelineParams::cutShare (`foldsAllowed`); else the guarded result stands,
   // and says that it missed: Method 1 forced onto a cone cut 1865 of 697, and the torus laid across its
   // parabolic circles (Fig. 19's infeasible direction) 143 of 925. Ceres solvers have no guard.
   //
@@ -2033,9 +2037,21 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
       keep = keep && nodesOfFourCut(t) < nodesOfFourCut(r) &&
              off <= goal * (2 * nodesOfFourCut(t) <= nodesOfFourCut(r) ? kFewerCutsFarther : 1.0);
     }
-    if (keep && static_cast<std::size_t>(t.interiorFacesSplit) <= facesBeforeCuts(t) / kSeamShare) {
+    const std::size_t before = facesBeforeCuts(t), cuts = static_cast<std::size_t>(t.interiorFacesSplit);
+    if (keep && cuts <= cutBudget(before, params.cutShare)) {
       takeSolve(std::move(t));
       r.foldsAllowed = true;
+    } else if (keep && !r.solve.converged && before > 0) {
+      // Planar, none crossing itself, but over the budget of cuts: the share that would keep it, rounded up to a
+      // hundredth, named for the caller.
+      const double share = std::ceil(100.0 * static_cast<double>(cuts) / static_cast<double>(before)) / 100.0;
+      std::ostringstream n;
+      n << "the solve with folds allowed reached the tolerance with no face crossing itself by cutting " << cuts
+        << " interior faces in two (" << std::lround(100.0 * cuts / before) << " % of the faces, each cut making two "
+        << "nodes of four faces), over the share of cuts allowed (cutShare " << params.cutShare
+        << "); with cutShare " << share << " or more the run keeps a planar mesh (this one, or one the guarded solve "
+        << "reaches with fewer cuts)";
+      r.triangulation.notes.push_back(n.str());
     }
   }
 

@@ -109,6 +109,11 @@ Options of `phex run`:
                             goes on; so are up to 8 interior faces left off planar, or all of
                             them on a surface laid in several systems of rows or where the solve
                             stalled (at most 1 in 20 faces) (default on)
+  --cut-share S             the largest share of the interior faces, 0-1, that may be cut in two so
+                            that the mesh comes out planar (each cut makes two nodes of four faces;
+                            default 0.1): on an upload that folds more (the noisy shared models fold
+                            11-28 % of their faces) a larger share gives a planar mesh with more such
+                            nodes where the default leaves it off planar (exit 2)
   --clip-boundary on|off    once solved, clip the boundary panels to the surface's boundary curve:
                             their boundary edges follow the curve projected onto each panel's plane,
                             so the edge panels can be cut as drawn (report: boundaryClip) (default on)
@@ -249,7 +254,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                  {"splitBoundary", p.splitBoundaryPanels ? "on" : "off"}, {"clipBoundary", p.clipBoundary ? "on" : "off"},
                  {"foldFlips", p.foldFlips ? "on" : "off"}, {"anisotropy", p.anisotropy}, {"alignment", p.alignment},
                  {"curvatureSizing", p.curvatureSizing}, {"curvatureFloor", p.curvatureFloor}, {"relay", p.relay ? "on" : "off"},
-                 {"fairness", p.fairness}};
+                 {"fairness", p.fairness}, {"cutShare", p.cutShare}};
   if (p.start) params["start"] = {p.start->x(), p.start->y(), p.start->z()};
   if (p.direction) params["direction"] = {p.direction->x(), p.direction->y(), p.direction->z()};
   return {{"phex", "0.1.0"},
@@ -386,6 +391,7 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--relay") p.relay = parseSwitch(a, value(), "on", "off");
     else if (a == "--curvature-floor") p.curvatureFloor = parseNumber(a, value());
     else if (a == "--fairness") p.fairness = parseNumber(a, value());
+    else if (a == "--cut-share") p.cutShare = parseNumber(a, value());
     else if (a == "--alignment") p.alignment = parseNumber(a, value());
     else if (a == "--curvature-sizing") p.curvatureSizing = parseNumber(a, value());
     else if (a == "--start") p.start = parseVector(a, value());
@@ -545,7 +551,8 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     std::cerr << "phex: not converged: planarity max " << r.metrics.planarityMax << " is above the tolerance "
               << p.tolerance << " after " << r.solve.iterations
               << " iterations; the mesh is written as it stands (exit 2). The report's notes say where the "
-                 "triangulation fell short; another method, field or face count may do\n";
+                 "triangulation fell short (and, where more faces cut would make it planar, the --cut-share that "
+                 "does); another method, field or face count may do\n";
   if (r.metrics.selfIntersectingCount > 0)
     std::cerr << "phex: " << r.metrics.selfIntersectingCount
               << " faces cross themselves: the mesh is written as it stands (exit 2)\n";

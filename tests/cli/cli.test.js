@@ -103,6 +103,7 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--fold-flips', 'sometimes'], /--fold-flips must be on or off/],
     [['run', '--relay', 'twice'], /--relay must be on or off/],
     [['run', '--fairness', '2'], /fairness must be in \[0, 1\]/],
+    [['run', '--cut-share', '1.5'], /cutShare must be in \[0, 1\]/],
     [['run', '--curvature-floor', '0'], /curvatureFloor must be in \[0\.01, 1\]/],
     [['run', '--start', '1,2'], /--start expects X,Y,Z/],
     [['run', '--direction', '0,0,0'], /direction must be a non-zero vector/],

@@ -138,6 +138,8 @@ test("the global method's options out of range reject with a PHexError naming th
     [{ relay: 'twice' }, /relay/],
     [{ fairness: -0.1 }, /fairness/],
     [{ fairness: 2 }, /fairness/],
+    [{ cutShare: -0.1 }, /cutShare/],
+    [{ cutShare: 2 }, /cutShare/],
   ];
   for (const [options, message] of cases) {
     const error = await phex.run({ surface: 'torus', faces: 300, method: 'global', ...options }).then(

@@ -359,6 +359,8 @@ export interface RunParams {
    * (up to 1 in 20 faces) or on a surface laid in several systems of rows (up to 1 in 10). 'off': not.
    */
   splitBoundary?: 'on' | 'off';
+  /** The largest share of the interior faces, in [0, 1], that may be cut in two so that the mesh comes out planar (default 0.1; each cut makes two nodes of four faces). */
+  cutShare?: number;
   /**
    * 'on' (default): once solved, the boundary panels are clipped to the surface's boundary curve: their boundary
    * edges follow the curve projected onto each panel's plane (so they stay planar), the nodes shared with their
@@ -430,7 +432,7 @@ export interface RunParams {
 
 /** A run parameter as listed in {@link PARAMETERS}. */
 export interface ParameterSpec {
-  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'clipBoundary' | 'foldFlips' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing' | 'curvatureFloor' | 'relay' | 'fairness';
+  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'cutShare' | 'clipBoundary' | 'foldFlips' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing' | 'curvatureFloor' | 'relay' | 'fairness';
   /** 'point': an [x, y, z] array, or null for the default. */
   type: 'integer' | 'number' | 'enum' | 'field' | 'point';
   default: number | string | null;

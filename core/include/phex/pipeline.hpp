@@ -92,6 +92,13 @@ struct PipelineParams {
   // same way (PipelineResult::interiorFacesSplit); on a surface laid in several systems of rows (its seams
   // and rows along parabolic rings leave more such faces: round bumps) every interior face left off is.
   bool splitBoundaryPanels = true;
+  // The largest share of the interior faces (before any cut) that may be cut so that the mesh comes out planar, in
+  // [0, 1]: on a surface laid in several systems of rows or by the global method, faces the solve leaves off planar
+  // are cut within it, and a solve with folds allowed that cuts every face it folds is kept within it. Each cut makes
+  // two nodes of four faces. Where a surface folds more (near-developable or coarse uploads: the noisy shared models
+  // fold 11-28 % of their faces), a larger share gives a planar mesh with that many nodes of four instead of a mesh
+  // the solve leaves off planar.
+  double cutShare = 0.1;
   // Once solved, the boundary panels are clipped to the surface's boundary curve (clipBoundaryPanels): their
   // boundary edges follow the curve, projected onto each panel's plane, and the nodes they share with their
   // neighbours move along the shared edge onto it. PipelineResult::boundaryClip counts them.
