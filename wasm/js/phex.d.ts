@@ -356,7 +356,8 @@ export interface RunParams {
    * that crosses itself, is cut in two along its best diagonal and the solve goes on
    * (`solve.boundaryPanelsSplit`); so are interior faces left off planar where only folding would make
    * them planar (`solve.interiorFacesSplit`): a few (at most 8), or all of them where the solve stalled
-   * (up to 1 in 20 faces) or on a surface laid in several systems of rows (up to 1 in 10). 'off': not.
+   * (up to 1 in 20 faces) or on a surface laid in several systems of rows or by the global method (up to
+   * `cutShare` of them, by default 1 in 10). 'off': not.
    */
   splitBoundary?: 'on' | 'off';
   /** The largest share of the interior faces, in [0, 1], that may be cut in two so that the mesh comes out planar (default 0.1; each cut makes two nodes of four faces). */
