@@ -1,6 +1,6 @@
 // phex — fuzz target: the whole pipeline on a tiny uploaded mesh (fuzz.hpp: decodeMesh, written as the OBJ
 // file a user would upload), at most 60 faces, with the method (the global one with its field options, the
-// solver's fairness and the second lay too),
+// solver's fairness, the share of cuts and the second lay too),
 // field, duality, solver and options a byte picks. It tiles the mesh or refuses it; what it returns is finite.
 #include <phex/pipeline.hpp>
 
@@ -36,6 +36,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::uint8_t solver = in.byte();
     p.fairness = (solver & 3) / 3.0;                          // 0 .. 1
     p.curvatureFloor = 0.01 + 0.99 * ((solver >> 2) & 7) / 7;  // 0.01 .. 1
+    p.cutShare = (solver >> 5) & 3 ? ((solver >> 5) & 3) / 3.0 : 0.1;  // the default, 1/3, 2/3, 1
   }
   const phex::TriMesh m = decodeMesh(in);
   std::string obj;
