@@ -280,13 +280,11 @@ int untangleDual(DualMesh& dual, const TriMesh& T, const std::vector<LocalGeomet
   };
   // Which faces cross themselves as a sweep starts, over threads; in the sweep a face with a corner moved since is
   // measured again (so the sweep sees what measuring every face in turn would see).
-  std::vector<char> crossed(nfd, 0), touched(nvd, 0);
+  std::vector<char> touched(nvd, 0);
   int moved = 0;
   for (int sweep = 0; sweep < 4; ++sweep) {
     int changed = 0;
-    parallelRanges(nfd, kPointsPerThread, [&](int begin, int end) {
-      for (int f = begin; f < end; ++f) crossed[f] = !dual.boundaryFace[f] && faceSelfIntersects(M, f);
-    });
+    const std::vector<char> crossed = selfIntersectingFaces(M);
     std::fill(touched.begin(), touched.end(), char(0));
     for (int f = 0; f < nfd; ++f) {
       if (dual.boundaryFace[f]) continue;

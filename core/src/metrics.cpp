@@ -166,6 +166,14 @@ bool faceSelfIntersects(const PolyMesh& mesh, int face) {
   return polygonSelfIntersects(planarCorners(mesh, face, leastSquaresPlane(mesh, face)));
 }
 
+std::vector<char> selfIntersectingFaces(const PolyMesh& mesh) {
+  std::vector<char> crosses(mesh.faceCount(), 0);
+  parallelRanges(mesh.faceCount(), kPointsPerThread, [&](int begin, int end) {
+    for (int f = begin; f < end; ++f) crosses[f] = faceSelfIntersects(mesh, f);
+  });
+  return crosses;
+}
+
 bool faceSelfIntersects(const PolyMesh& mesh, int face, const Vec3& normal) {
   thread_local std::vector<Vec2> p;  // asked often, of every face in a fit or a solver's fold check
   planarCorners(mesh, face, FacePlane{Vec3::Zero(), normal}, p);

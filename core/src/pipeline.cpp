@@ -803,13 +803,10 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     DualMesh dual = dupinDual(t, surface);
     PolyMesh hex = dual.mesh;
     PlanarizeReport solved = planarize(hex, po, {}, cancel);
-    std::vector<char> folds(hex.faceCount(), 0);  // over threads
-    parallelRanges(hex.faceCount(), kPointsPerThread, [&](int begin, int end) {
-      for (int f = begin; f < end; ++f) folds[f] = !dual.boundaryFace[f] && hex.faceSize(f) >= 4 && faceSelfIntersects(hex, f);
-    });
+    const std::vector<char> crosses = selfIntersectingFaces(hex);
     std::vector<int> folded;
     for (int f = 0; f < hex.faceCount(); ++f)
-      if (folds[f]) folded.push_back(f);
+      if (crosses[f] && !dual.boundaryFace[f] && hex.faceSize(f) >= 4) folded.push_back(f);
     if (round == 0 && folded.size() > kFoldFlipShare * double(dual.mesh.faceCount())) {
       keptDual = std::move(dual);  // of `best`, which is `t` as it came
       keptSolve = SolvedDual{std::move(hex), std::move(solved)};
@@ -1739,11 +1736,8 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
     clock.done("dualize");
     return dual;
   };
-  auto crossing = [](const PolyMesh& m) {  // over threads
-    std::vector<char> crosses(m.faceCount(), 0);
-    parallelRanges(m.faceCount(), kPointsPerThread, [&](int begin, int end) {
-      for (int f = begin; f < end; ++f) crosses[f] = faceSelfIntersects(m, f);
-    });
+  auto crossing = [](const PolyMesh& m) {
+    const std::vector<char> crosses = selfIntersectingFaces(m);
     return static_cast<int>(std::count(crosses.begin(), crosses.end(), char(1)));
   };
   // The global method's solves fit the planes to the surface once, after their last round of cuts, instead of
@@ -1898,6 +1892,14 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
     again.initial.V = x.initial.V;  // the dual as laid, not the mesh put back (cuts add no vertex)
     return again;
   };
+  // Whether putBack's result `again` cut at most kPutBackCuts (and one in 1000) more interior faces than `x`.
+  auto fewMoreCuts = [&](const PipelineResult& again, const PipelineResult& x) {
+    return again.interiorFacesSplit <= x.interiorFacesSplit + kPutBackCuts + static_cast<int>(facesBeforeCuts(x) / 1000);
+  };
+  // Whether x's interior faces cut stay within the run's share of cuts.
+  auto withinCutShare = [&](const PipelineResult& x) {
+    return static_cast<std::size_t>(x.interiorFacesSplit) <= cutBudget(facesBeforeCuts(x), params.cutShare);
+  };
   bool settled = false;
   // The solve with folds allowed from the Dupin dual where it did not stand: the unguarded solve below, from the
   // same dual with the same options, is this one (the bench's upload at 100k faces: planarize 17.1 -> 13.9 s, the
@@ -1908,8 +1910,7 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
     PipelineResult t;
     solveUnguarded(t, Duality::Dupin);
     auto stands = [&](const PipelineResult& x) {
-      return x.solve.converged && crossing(x.hex) == 0 &&
-             static_cast<std::size_t>(x.interiorFacesSplit) <= cutBudget(facesBeforeCuts(x), params.cutShare);
+      return x.solve.converged && crossing(x.hex) == 0 && withinCutShare(x);
     };
     // Where it stands but for a few nodes past the distance goal (three planes through nearly one line), those are
     // put back on the surface and solved again from there, as a converged result is below, and kept where that
@@ -1918,8 +1919,7 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
     // mesh 0.22 % of the diagonal off.
     if (stands(t) && offSurface(t) > kSurfaceDistanceGoal) {
       PipelineResult again = putBack(t);
-      if (stands(again) && offSurface(again) <= kSurfaceDistanceGoal &&
-          again.interiorFacesSplit <= t.interiorFacesSplit + kPutBackCuts + static_cast<int>(facesBeforeCuts(t) / 1000))
+      if (stands(again) && offSurface(again) <= kSurfaceDistanceGoal && fewMoreCuts(again, t))
         t = std::move(again);
     }
     if (stands(t) && offSurface(t) <= kSurfaceDistanceGoal) {
@@ -2037,11 +2037,11 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
       keep = keep && nodesOfFourCut(t) < nodesOfFourCut(r) &&
              off <= goal * (2 * nodesOfFourCut(t) <= nodesOfFourCut(r) ? kFewerCutsFarther : 1.0);
     }
-    const std::size_t before = facesBeforeCuts(t), cuts = static_cast<std::size_t>(t.interiorFacesSplit);
-    if (keep && cuts <= cutBudget(before, params.cutShare)) {
+    if (keep && withinCutShare(t)) {
       takeSolve(std::move(t));
       r.foldsAllowed = true;
-    } else if (keep && !r.solve.converged && before > 0) {
+    } else if (const std::size_t before = facesBeforeCuts(t); keep && !r.solve.converged && before > 0) {
+      const std::size_t cuts = static_cast<std::size_t>(t.interiorFacesSplit);
       // Planar, none crossing itself, but over the budget of cuts: the share that would keep it, rounded up to a
       // hundredth, named for the caller.
       const double share = std::ceil(100.0 * static_cast<double>(cuts) / static_cast<double>(before)) / 100.0;
@@ -2066,8 +2066,7 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
     const double off = offSurface(r);
     if (off > kSurfaceDistanceGoal && crossing(r.hex) == 0) {
       PipelineResult again = putBack(r);
-      if (again.solve.converged && crossing(again.hex) == 0 && offSurface(again) < off &&
-          again.interiorFacesSplit <= r.interiorFacesSplit + kPutBackCuts + static_cast<int>(facesBeforeCuts(r) / 1000))
+      if (again.solve.converged && crossing(again.hex) == 0 && offSurface(again) < off && fewMoreCuts(again, r))
         takeSolve(std::move(again));
     }
   }

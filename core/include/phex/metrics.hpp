@@ -33,6 +33,8 @@ bool polygonSelfIntersects(const std::vector<Vec2>& polygon);
 bool faceSelfIntersects(const PolyMesh& mesh, int face);
 // The same, with the corners projected onto a plane of the given normal (e.g. the face's current plane).
 bool faceSelfIntersects(const PolyMesh& mesh, int face, const Vec3& normal);
+// faceSelfIntersects(mesh, f) of every face (1: it crosses itself), over threads.
+std::vector<char> selfIntersectingFaces(const PolyMesh& mesh);
 // How far the face, its corners projected onto a plane of the given normal, is from crossing itself: the
 // smallest distance from a corner to an edge not at it, 0 when it crosses itself already. Moving one corner
 // by less than this keeps the polygon simple (two edges first touch with a corner on the other edge).

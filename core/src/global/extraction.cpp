@@ -65,6 +65,13 @@ class Extractor {
   Extraction run(const CancelFlag* cancel) {
     clusterSites();
     boundarySites();
+    // For label(), which grows the regions once per round: cells(d, v) as the length of (a . d, b . d), the Dupin
+    // frame's axes scaled by sigma and 1 / sigma over the cell there (they are tangent: d's normal part drops out).
+    axes_.resize(m_.vertexCount());
+    for (int v = 0; v < m_.vertexCount(); ++v) {
+      const Frame& f = m_.frame[v];
+      axes_[v] = {f.sigma / h(v) * f.t, f.b() / (f.sigma * h(v))};
+    }
     Extraction out;
     int repairs = 0;
     for (int round = 0;; ++round) {
@@ -288,15 +295,6 @@ class Extractor {
   // Every fine vertex to its nearest site (in the Dupin metric, in cells), regions grown from the seeds outwards.
   void label() {
     const int nv = m_.vertexCount();
-    // cells(d, v) as the length of (a . d, b . d): the Dupin frame's axes scaled by sigma and 1 / sigma, over the
-    // cell there (the frame's axes are tangent: d's normal part drops out).
-    if (static_cast<int>(axes_.size()) != nv) {
-      axes_.resize(nv);
-      for (int v = 0; v < nv; ++v) {
-        const Frame& f = m_.frame[v];
-        axes_[v] = {f.sigma / h(v) * f.t, f.b() / (f.sigma * h(v))};
-      }
-    }
     auto cellsTo = [&](const Vec3& d, int v) {
       const double a = dot(axes_[v][0], d), b = dot(axes_[v][1], d);
       return std::sqrt(a * a + b * b);
@@ -532,7 +530,7 @@ class Extractor {
   std::vector<Site> sites_;
   std::vector<int> clusterOf_;
   std::vector<char> clusterHasBoundary_;
-  std::vector<std::array<Vec3, 2>> axes_;  // per fine vertex, for label()
+  std::vector<std::array<Vec3, 2>> axes_;  // per fine vertex, for label() (run sets them)
   std::vector<int> label_, siteOf_;
   std::vector<double> dist_;
   std::vector<std::string> notes_;
