@@ -176,6 +176,16 @@ std::vector<char> thinPolyline(const std::vector<Vec3>& p, double tol) {
   return keep;
 }
 
+// The point at arc length s along the polyline p (clamped to its ends).
+Vec3 pointAlong(const std::vector<Vec3>& p, double s) {
+  for (std::size_t q = 1; q < p.size(); ++q) {
+    const double l = (p[q] - p[q - 1]).norm();
+    if (s <= l) return l > 0 ? Vec3(p[q - 1] + (s / l) * (p[q] - p[q - 1])) : p[q - 1];
+    s -= l;
+  }
+  return p.back();
+}
+
 }  // namespace
 
 BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
@@ -221,8 +231,8 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
   };
 
   // Moved nodes stay as near the surface as the farthest node already is, or within half the goal.
-  const double farthest =
-      std::max(largestSurfaceDistance(mesh, surface), 0.5 * kSurfaceDistanceGoal * surface.bounds().diagonal().norm());
+  const double farthestNode = largestSurfaceDistance(mesh, surface);
+  const double farthest = std::max(farthestNode, 0.5 * kSurfaceDistanceGoal * surface.bounds().diagonal().norm());
   std::vector<int> near;
   std::vector<Vec3> segmentNormal(curve.segments().size());  // the surface's normal at a segment's middle
   std::vector<char> normaled(curve.segments().size(), 0);
@@ -302,6 +312,9 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
     std::vector<int> ids;
     std::vector<Vec3> added;
     std::vector<int> junctions;  // the runs' ends
+    // Corners a filler's off a run's end that stays off the curve (see kFillerOff): (the end's node, the
+    // corner's index in `added`), where the run starts there and where it ends there.
+    std::vector<std::pair<int, int>> fromEnd, toEnd;
     bool ok = false;
   };
   std::vector<std::vector<ClipEnd>> cache(2, std::vector<ClipEnd>(static_cast<std::size_t>(V)));
@@ -369,24 +382,68 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
           }
       }
       piece.push_back(eb.c);
+      // An end that stays off the curve (its shared edge runs along the wall) gets a corner on the curve
+      // kFillerSpan mean edges along the run from its nearest point, for the filler panel between it and the
+      // neighbouring panel's such corner (below); where the run is too short for the corners, it keeps its tooth.
+      // (Only at a node of two panels: the filler makes it one of three.)
+      bool offA = nodeFaces[a] == 2 && (ea.w - ea.c).norm() > kFillerOff * h;
+      bool offB = nodeFaces[b] == 2 && (eb.w - eb.c).norm() > kFillerOff * h;
+      if (offA || offB) {
+        double length = 0;
+        for (std::size_t q = 1; q < piece.size(); ++q) length += (piece[q] - piece[q - 1]).norm();
+        double from = offA ? kFillerSpan * h : 0.0, to = length - (offB ? kFillerSpan * h : 0.0);
+        // A short run: its corner halfway, or where both ends are off, its two corners at its thirds (one corner
+        // for both fillers would be a node of three panels on the outline, whose beams' axes could not turn to keep
+        // the boundary beams planar).
+        bool fits = to - from >= kClipSpacing * h;
+        if (!fits && length >= kClipSpacing * h) {
+          if (offA && offB) from = length / 3, to = 2 * length / 3;
+          else if (offA) from = 0.5 * length;
+          else to = 0.5 * length;
+          fits = true;
+        }
+        if (fits) {
+          std::vector<Vec3> trimmed{pointAlong(piece, from)};
+          double at = 0;
+          for (std::size_t q = 1; q + 1 < piece.size(); ++q) {
+            at += (piece[q] - piece[q - 1]).norm();
+            if (at > from && at < to) trimmed.push_back(piece[q]);
+          }
+          trimmed.push_back(pointAlong(piece, to));
+          // (The corners no farther off the surface than the farthest node: the mesh's largest distance stays.)
+          const bool nearA = !offA || (project(trimmed.front()) - trimmed.front()).norm() <= farthestNode;
+          const bool nearB = !offB || (project(trimmed.back()) - trimmed.back()).norm() <= farthestNode;
+          if (nearA && nearB) piece = std::move(trimmed);
+          else offA = offB = false;  // the curve stands too high over the panel's plane there
+        } else {
+          offA = offB = false;
+        }
+      }
       const std::vector<char> keep = thinPolyline(piece, kClipTolerance * h);
       c.junctions.push_back(a);
       c.ids.push_back(a);
       position.push_back(ea.w);
+      auto addCorner = [&](const Vec3& x) {
+        c.ids.push_back(-1 - static_cast<int>(c.added.size()));
+        c.added.push_back(x);
+        position.push_back(x);
+        return static_cast<int>(c.added.size()) - 1;
+      };
       Vec3 last = ea.w;  // the run's last corner so far
+      if (offA) c.fromEnd.emplace_back(a, addCorner(last = project(piece.front())));
+      const Vec3 stop = offB ? project(piece.back()) : eb.w;  // the run's last corner
       for (std::size_t q = 1; q + 1 < piece.size(); ++q) {
         if (!keep[q]) continue;
         const Vec3 x = project(piece[q]);
         // Not nearer than kClipSpacing to the corner before or the run's end (short edges would make the panel's
         // planarity, relative to its mean edge, look worse than it is), nor farther off the surface than the
         // moved nodes may go (the curve stands that high over the panel's plane there).
-        if ((x - last).norm() < kClipSpacing * h || (x - eb.w).norm() < kClipSpacing * h) continue;
+        if ((x - last).norm() < kClipSpacing * h || (x - stop).norm() < kClipSpacing * h) continue;
         if ((x - piece[q]).norm() > farthest) continue;
-        c.ids.push_back(-1 - static_cast<int>(c.added.size()));
-        c.added.push_back(x);
-        position.push_back(x);
+        addCorner(x);
         last = x;
       }
+      if (offB) c.toEnd.emplace_back(b, addCorner(stop));
       c.junctions.push_back(b);  // b follows as the next interior-edge node
       k = j;
     }
@@ -440,6 +497,7 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
   for (int v = 0; v < V; ++v) points.push_back(mesh.vertex(v));
   std::vector<std::vector<int>> faces(static_cast<std::size_t>(F));
   for (int f = 0; f < F; ++f) faces[f].assign(mesh.face(f), mesh.face(f) + mesh.faceSize(f));
+  std::vector<int> fromCorner(static_cast<std::size_t>(V), -1), toCorner(static_cast<std::size_t>(V), -1);
   for (std::size_t k = 0; k < panels.size(); ++k) {
     const Clipped& c = result[k];
     if (!c.ok) {
@@ -459,7 +517,17 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
       const ClipEnd& e = cache[fixed[a] ? 1 : 0][a];
       if (e.moved && !moved[a]) points[a] = e.w, moved[a] = 1, ++out.nodesMoved;
     }
+    for (const auto& [a, i] : c.fromEnd) fromCorner[a] = base + i;
+    for (const auto& [a, i] : c.toEnd) toCorner[a] = base + i;
   }
+  // The filler panels: a triangle from each end left off the curve to its two panels' corners on the curve (a
+  // triangle is planar whatever its corners), so the outline follows the curve there too and the end becomes a
+  // node of three panels. Where one of the two panels kept its edges, its neighbour's corner stays as it is.
+  for (int a = 0; a < V; ++a)
+    if (fromCorner[a] >= 0 && toCorner[a] >= 0) {
+      faces.push_back({a, toCorner[a], fromCorner[a]});
+      ++out.fillers;
+    }
   std::vector<int> index(points.size(), -1);  // the nodes still used, in their order
   for (const std::vector<int>& ids : faces)
     for (int id : ids) index[id] = 0;

@@ -2074,7 +2074,11 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
   if (params.clipBoundary && !surface.isClosed()) {  // (closed: no boundary curve)
     report("clip", 0, "clipping the boundary panels to the boundary curve");
     const PolyMesh unclipped = r.hex;
+    const std::size_t faces = r.dual.boundaryFace.size();
     r.boundaryClip = clipBoundaryPanels(r.hex, surface);
+    // Its fillers, appended after the panels, are boundary panels dual to no vertex of the triangulation.
+    r.dual.boundaryFace.resize(static_cast<std::size_t>(r.hex.faceCount()), 1);
+    r.dual.faceVertex.resize(static_cast<std::size_t>(r.hex.faceCount()), -1);
     // A node moved along its edge onto the curve carries the planarity the solve left its two panels (up to the
     // tolerance) to the shorter clipped edges: on a rough saddle at 1500 faces one face went from 7.9e-10 to
     // 1.1e-9. Such a mesh is settled by a few sweeps of the solver without the closeness term, else left unclipped.
@@ -2087,6 +2091,8 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
       planarize(r.hex, settle, {}, cancel);
       if (maxPlanarity(r.hex) > params.tolerance) {
         r.hex = unclipped;
+        r.dual.boundaryFace.resize(faces);
+        r.dual.faceVertex.resize(faces);
         r.boundaryClip = BoundaryClip{};
         r.triangulation.notes.push_back("the boundary panels were not clipped to the boundary curve: clipped, a panel "
                                         "was no longer planar to the tolerance");

@@ -74,19 +74,27 @@ BoundaryOffset boundaryOffset(const PolyMesh& mesh, const Surface& surface);
 // shared nodes a and b first move along the edge they share with the neighbouring panel (the line where the two
 // planes meet, so both stay planar) onto the curve's wall (the ribbon of surface normals along it), at most
 // kClipReach mean edges and no farther off the surface than the farthest node already is; where that line runs
-// along the wall, or the move would fold a panel, the node stays and the curve starts at its nearest point. The
+// along the wall, or the move would fold a panel, the node stays and the curve starts at its nearest point (or at a
+// filler's corner: below). The
 // curve's points are thinned (Douglas-Peucker) to kClipTolerance mean edges, kept at least kClipSpacing apart, and
 // those standing higher over the panel's plane than a moved node may lie off the surface left out. A panel whose clipped polygon would
 // cross itself or turn over keeps its boundary edges as they were (`skipped`).
+// A shared node that stays more than kFillerOff mean edges off the curve (its edge runs along the wall: where the
+// boundary runs near an asymptotic direction, the two panels' planes meet along it) would leave a tooth in the
+// outline; instead each of its two panels ends at a corner on the curve kFillerSpan mean edges from the node's
+// nearest point, and a triangle (planar whatever its corners) fills the gap between them: the outline follows the
+// curve and the node joins three panels (`fillers`).
 constexpr double kClipReach = 1.5;
 constexpr double kClipTolerance = 0.005;
 constexpr double kClipSpacing = 0.2;
+constexpr double kFillerOff = 0.1, kFillerSpan = 0.25;
 struct BoundaryClip {
   int panels = 0;        // boundary panels whose boundary edges now follow the curve
   int skipped = 0;       // boundary panels left as they were
   int nodesMoved = 0;    // nodes moved along their shared edge onto the curve's wall
   int nodesAdded = 0;    // points of the curve added to the panels
   int nodesRemoved = 0;  // boundary nodes of one panel replaced by the curve
+  int fillers = 0;       // triangles filling the gap at a shared node left off the curve (kFillerOff)
   // The edge as drawn: the largest distance of the curve's points to the P-Hex mesh's outline (the edges of one
   // panel), in mean edges (at most 2): the curve's height over the clipped panels' planes and the thinning, and
   // where panels could not be clipped, how far their edges stay from it.

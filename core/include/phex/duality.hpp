@@ -15,7 +15,7 @@ namespace phex {
 // no node starts off the surface past its border; the solve makes those faces planar again.
 struct DualMesh {
   PolyMesh mesh;
-  std::vector<int> faceVertex;      // #faces: the triangulation vertex each face is dual to
+  std::vector<int> faceVertex;      // #faces: the triangulation vertex each face is dual to (-1: a clip's filler)
   std::vector<std::uint8_t> boundaryFace;  // #faces: 1 for faces around boundary vertices
   std::vector<int> vertexTriangle;  // #V: the triangle each vertex is dual to, -1 for boundary-edge and corner points
   int fallbackCount = 0;         // dual vertices placed at the centroid (§6 parabolic fallback)
