@@ -391,7 +391,10 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
       if (offA || offB) {
         double length = 0;
         for (std::size_t q = 1; q < piece.size(); ++q) length += (piece[q] - piece[q - 1]).norm();
-        double from = offA ? kFillerSpan * h : 0.0, to = length - (offB ? kFillerSpan * h : 0.0);
+        // (Half the node's distance from the curve, where more: a deep tooth gets a filler about as wide as tall.)
+        const double spanA = std::max(kFillerSpan * h, 0.5 * (ea.w - ea.c).norm());
+        const double spanB = std::max(kFillerSpan * h, 0.5 * (eb.w - eb.c).norm());
+        double from = offA ? spanA : 0.0, to = length - (offB ? spanB : 0.0);
         // A short run: its corner halfway, or where both ends are off, its two corners at its thirds (one corner
         // for both fillers would be a node of three panels on the outline, whose beams' axes could not turn to keep
         // the boundary beams planar).

@@ -114,6 +114,24 @@ test('boundary nodes end on the surface\'s boundary curve (a clean edge), and a 
   assert.equal(r.boundaryClip.panels, 0);
 });
 
+test('where two boundary panels meet along the curve, a filler triangle closes the tooth (a clean edge on the bumps)', async () => {
+  // The bumps laid globally at 2000 faces: along one side the panels' shared nodes stayed 0.26-0.42 edges inside
+  // the curve (their shared edges run along it); each gets a filler triangle, and the outline follows the curve.
+  const r = await phex.run({ surface: 'freeform', method: 'global', faces: 2000 });
+  assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9);
+  assert.ok(r.boundaryClip.fillers >= 8, JSON.stringify(r.boundaryClip));
+  assert.ok(r.boundaryOffset.max < 0.01, JSON.stringify(r.boundaryOffset));
+  // The fillers come last: triangles on the boundary.
+  const { faceOffsets } = r.hex;
+  const faces = faceOffsets.length - 1;
+  for (let f = faces - r.boundaryClip.fillers; f < faces; f++) {
+    assert.equal(faceOffsets[f + 1] - faceOffsets[f], 3);
+    assert.equal(r.metrics.boundaryFace[f], 1);
+  }
+  const raw = await phex.run({ surface: 'freeform', method: 'global', faces: 2000, clipBoundary: 'off' });
+  assert.ok(raw.boundaryOffset.max > 0.25, JSON.stringify(raw.boundaryOffset));
+});
+
 test('the other methods return no singular points', async () => {
   const r = await phex.run({ surface: 'sphere', faces: 200 });
   assert.notEqual(r.method, 'global');

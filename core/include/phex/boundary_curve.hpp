@@ -81,8 +81,8 @@ BoundaryOffset boundaryOffset(const PolyMesh& mesh, const Surface& surface);
 // cross itself or turn over keeps its boundary edges as they were (`skipped`).
 // A shared node that stays more than kFillerOff mean edges off the curve (its edge runs along the wall: where the
 // boundary runs near an asymptotic direction, the two panels' planes meet along it) would leave a tooth in the
-// outline; instead each of its two panels ends at a corner on the curve kFillerSpan mean edges from the node's
-// nearest point, and a triangle (planar whatever its corners) fills the gap between them: the outline follows the
+// outline; instead each of its two panels ends at a corner on the curve kFillerSpan mean edges (or half the node's
+// distance, where more) from the node's nearest point, and a triangle (planar whatever its corners) fills the gap between them: the outline follows the
 // curve and the node joins three panels (`fillers`).
 constexpr double kClipReach = 1.5;
 constexpr double kClipTolerance = 0.005;
