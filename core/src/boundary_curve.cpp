@@ -312,8 +312,8 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
     std::vector<int> ids;
     std::vector<Vec3> added;
     std::vector<int> junctions;  // the runs' ends
-    // Corners a filler's off a run's end that stays off the curve (see kFillerOff): (the end's node, the
-    // corner's index in `added`), where the run starts there and where it ends there.
+    // The corners for the fillers (kFillerOff) at the runs' ends left off the curve: (the end's node, the
+    // corner's index in `added`), for the runs that start there (fromEnd) and those that end there (toEnd).
     std::vector<std::pair<int, int>> fromEnd, toEnd;
     bool ok = false;
   };
