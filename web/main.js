@@ -434,6 +434,7 @@ function showStats({ metrics, solve, timings, method, field, triangulation, dual
   $('edge-info').textContent = !boundaryOffset?.nodes
     ? '–'
     : [boundaryClip?.panels ? `${boundaryClip.panels} panels clipped` : null, boundaryClip?.skipped ? `${boundaryClip.skipped} not` : null,
+       boundaryClip?.fillers ? `${boundaryClip.fillers} fillers` : null,
        boundaryClip?.panels ? `gap ${boundaryClip.gapMax.toFixed(3)} edges` : null, `nodes off ${boundaryOffset.max.toFixed(3)} edges max`]
         .filter(Boolean)
         .join(', ');

@@ -554,6 +554,22 @@ test('a link with parameters restores the design', async () => {
   }
 });
 
+test('the edge statistics count the filler triangles where two boundary panels meet along the curve', async () => {
+  // The bumps laid globally at 2000 faces: a side whose boundary runs near an asymptotic direction.
+  const other = await context.newPage();
+  try {
+    await other.goto(`${url}/#surface=freeform&method=global&faces=2000`);
+    await other.waitForSelector('body[data-state=ready]', { timeout: RUN_TIMEOUT_MS });
+    const edge = await other.textContent('#edge-info');
+    const fillers = Number((edge.match(/(\d+) fillers/) ?? [])[1]);
+    assert.ok(fillers >= 8, edge);
+    const off = Number((edge.match(/nodes off ([\d.]+) edges max/) ?? [])[1]);
+    assert.ok(off < 0.01, edge);
+  } finally {
+    await other.close();
+  }
+});
+
 test('the embedding example computes a mesh and follows its sliders', async () => {
   const embed = await context.newPage();
   const errors = [];
