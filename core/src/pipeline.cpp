@@ -1581,7 +1581,8 @@ constexpr std::size_t kStalledShare = 20;
 // Dupin dual no solve could make planar: without the budget four rounds cut 5676 interior faces of 5420, cutting the
 // pieces again, and left a mesh of 6883 triangles.
 std::size_t cutBudget(std::size_t uncut, double share) {
-  return static_cast<std::size_t>(std::floor(static_cast<double>(uncut) * share + 1e-9));  // a tenth: uncut / 10
+  // (At the default share, a tenth, this is uncut / 10: the fixed budget it replaced.)
+  return static_cast<std::size_t>(std::floor(static_cast<double>(uncut) * share + 1e-9));
 }
 // Of two solves from the two duals that both stopped short of the tolerance, the one with fewer interior faces
 // cut is kept where the counts differ by more than one face in this many; else the one nearer planar. Kept by
