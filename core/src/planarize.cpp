@@ -258,11 +258,20 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
   // the face's diameter D. Measuring every face's margin again after every plane fit took a third of the
   // local solver's time at 100k faces; late in a solve the planes hardly turn.
   std::vector<double> foldMargin(nf, -1.0);
+  // Faces at a fixed vertex keep the plane their corners first gave (PlanarizeOptions::fixedVertices).
+  std::vector<char> heldPlane;
+  if (options.fixedVertices) {
+    heldPlane.assign(nf, 0);
+    for (int f = 0; f < nf; ++f)
+      for (int i = 0; i < mesh.faceSize(f); ++i) heldPlane[f] |= (*options.fixedVertices)[mesh.face(f)[i]];
+  }
   auto fitFace = [&](int f) {
     const int n = mesh.faceSize(f);
     const int* ids = mesh.face(f);
     const Vec3 before = normal[f];
-    if (!refinePlane(mesh, f, warm, normal[f], offset[f])) {
+    if (warm && !heldPlane.empty() && heldPlane[f]) {
+      // kept
+    } else if (!refinePlane(mesh, f, warm, normal[f], offset[f])) {
       const FacePlane fp = leastSquaresPlane(mesh, f);
       normal[f] = fp.normal;
       offset[f] = fp.normal.dot(fp.centroid);
@@ -404,11 +413,15 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
   };
   auto moveVertex = [&](int v, double lambda) { takeStep(v, displacement(v, lambda)); };
   std::vector<Vec3> steps(nv);
+  const std::vector<char>* fixed = options.fixedVertices;
+  auto isFixed = [&](int v) { return fixed && (*fixed)[v]; };
   auto vertexStep = [&](double lambda) {
     parallelRanges(nv, kFacesPerThread, [&](int begin, int end) {
-      for (int v = begin; v < end; ++v) steps[v] = displacement(v, lambda);
+      for (int v = begin; v < end; ++v)
+        if (!isFixed(v)) steps[v] = displacement(v, lambda);
     });
-    for (int v = 0; v < nv; ++v) takeStep(v, steps[v]);
+    for (int v = 0; v < nv; ++v)
+      if (!isFixed(v)) takeStep(v, steps[v]);
   };
   // Once λ is gone, a handful of faces can lag behind the rest, each sweep taking off only a fixed
   // fraction of their error (on a 100k-face free-form mesh: two adjacent hexagons at 0.66 per sweep, 28
@@ -433,7 +446,8 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
       for (int k = vertexStart[v]; k < vertexStart[v + 1]; ++k)
         if (const int g = vertexFaces[k]; !planeInRegion[g]) planeInRegion[g] = 1, planes.push_back(g);
     for (int sweep = 0; sweep < 20; ++sweep) {
-      for (int v : region) moveVertex(v, 0.0);
+      for (int v : region)
+        if (!isFixed(v)) moveVertex(v, 0.0);
       for (int g : planes) fitFace(g);
     }
     for (int v : region) inRegion[v] = 0;
@@ -511,6 +525,10 @@ PlanarizeReport solvePlanarity(PolyMesh& mesh, const PlanarizeOptions& options, 
   if (options.mu > 0 && !options.surface) throw Error(ErrorCode::InvalidParameter, "mu > 0 needs a surface");
   if (options.maxIterations < 1) throw Error(ErrorCode::InvalidParameter, "maxIterations must be at least 1");
   if (!mesh.V.allFinite()) throw Error(ErrorCode::InvalidInput, "the mesh to planarize has non-finite coordinates");
+  if (options.fixedVertices && static_cast<Eigen::Index>(options.fixedVertices->size()) != mesh.V.rows())
+    throw Error(ErrorCode::InvalidParameter, "fixedVertices must have one entry per vertex of the mesh");
+  if (options.fixedVertices && options.method != PlanarizeMethod::LocalGlobal)
+    throw Error(ErrorCode::InvalidParameter, "fixedVertices is an option of the local solver alone");
 
   PlanarizeReport report;
   report.initialPlanarityMax = report.planarityMax = maxPlanarity(mesh);

@@ -1114,7 +1114,8 @@ TEST_CASE("pipeline: a vertex filled in on a closed row stays between its neighb
   // A torus sampled 24 x 12, refined, at 1000 faces (cells of 0.27): a closed row's missing apex was filled in
   // at the middle of the arc between its neighbours, whose arcs had come out a hair in the wrong order, so on
   // the far side of the loop: five triangles 3.2 long spanned the hole, and a P-Hex node lay 0.8 off the
-  // surface (9.8 % of the diagonal). Now no edge of the lay is over 3 cells.
+  // surface (9.8 % of the diagonal). Now no edge of the lay is over 4 cells (the edge collapses against folds
+  // next to the parabolic circles leave edges of up to about 3 cells: 3.05 here).
   std::ostringstream obj;
   obj << std::fixed;
   obj.precision(9);
@@ -1142,7 +1143,7 @@ TEST_CASE("pipeline: a vertex filled in on a closed row stays between its neighb
     for (int k = 0; k < 3; ++k)
       longest = std::max(longest, (t.V.row(t.F(f, k)) - t.V.row(t.F(f, (k + 1) % 3))).norm());
   INFO("longest edge " << longest << ", cell " << cell);
-  CHECK(longest < 3 * cell);
+  CHECK(longest < 4 * cell);
   CHECK(r.farNodes == 0);
   clearUploadCache();
 }

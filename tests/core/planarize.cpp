@@ -48,6 +48,69 @@ TEST_CASE("planarize: bad options are rejected, cancel stops") {
   CHECK_THROWS_WITH(planarize(m, PlanarizeOptions{}), Catch::Contains("non-finite"));
 }
 
+TEST_CASE("planarize: fixed vertices keep their place, the faces at them their planes, and the rest comes planar") {
+  // A planar P-Hex mesh with a patch of its nodes pushed off their faces; the patch and two rings of faces around
+  // it are solved again with the rest held, as the pipeline's rounds against folds do.
+  PipelineParams p;
+  p.surface = "torus";
+  p.faces = 600;
+  const PipelineResult r = runPipeline(p);
+  REQUIRE(r.solve.converged);
+  PolyMesh m = r.hex;
+  const int nv = static_cast<int>(m.V.rows());
+  const double h = m.meanEdgeLength();
+  const Vec3 centre = m.vertex(0);
+  std::vector<char> free(nv, 0);
+  int pushed = 0;
+  for (int v = 0; v < nv; ++v)
+    if ((m.vertex(v) - centre).norm() < 1.2 * h) {
+      free[v] = 1, ++pushed;
+      m.V.row(v) += 0.15 * h * Vec3(std::sin(3.0 * v), std::cos(5.0 * v), std::sin(7.0 * v)).transpose();
+    }
+  REQUIRE(pushed >= 3);
+  for (int ring = 0; ring < 2; ++ring) {
+    std::vector<char> grown = free;
+    for (int f = 0; f < m.faceCount(); ++f) {
+      bool touches = false;
+      for (int i = 0; i < m.faceSize(f); ++i) touches = touches || free[m.face(f)[i]];
+      if (touches)
+        for (int i = 0; i < m.faceSize(f); ++i) grown[m.face(f)[i]] = 1;
+    }
+    free.swap(grown);
+  }
+  std::vector<char> fixed(nv);
+  for (int v = 0; v < nv; ++v) fixed[v] = !free[v];
+  const PolyMesh before = m;
+  REQUIRE(maxPlanarity(m) > 1e-3);
+  PlanarizeOptions o;
+  o.fitSurface = false;
+  o.fixedVertices = &fixed;
+  const PlanarizeReport rep = planarize(m, o);
+  CHECK(rep.converged);
+  CHECK(maxPlanarity(m) <= 1e-9);
+  int moved = 0, held = 0;
+  for (int v = 0; v < nv; ++v) {
+    if (fixed[v]) held += m.V.row(v) == before.V.row(v);
+    else moved += m.V.row(v) != before.V.row(v);
+  }
+  CHECK(held == std::count(fixed.begin(), fixed.end(), char(1)));
+  CHECK(moved >= pushed);
+  // Without the rim held, the same solve moves nodes all over the mesh.
+  PolyMesh loose = before;
+  o.fixedVertices = nullptr;
+  planarize(loose, o);
+  int away = 0;
+  for (int v = 0; v < nv; ++v) away += fixed[v] && loose.V.row(v) != before.V.row(v);
+  CHECK(away > 0);
+  // Bad input: a mask of another size, or another solver.
+  std::vector<char> wrong(nv + 1, 0);
+  o.fixedVertices = &wrong;
+  CHECK_THROWS_WITH(planarize(loose, o), Catch::Contains("one entry per vertex"));
+  o.fixedVertices = &fixed;
+  o.method = PlanarizeMethod::Planes;
+  CHECK_THROWS_WITH(planarize(loose, o), Catch::Contains("local solver"));
+}
+
 TEST_CASE("planarize: the local solver keeps simple faces simple unless folds are allowed") {
   // The free-form surface's Method 2 triangulation has faces across its parabolic rings that only reach
   // planarity by folding: with folds prevented they stay simple and planarity stops short (and says so).

@@ -50,6 +50,10 @@ struct PlanarizeOptions {
   // its faces' planes, so the faces stay exactly planar) to bring the vertices closer to the surface
   // (needs `surface`). Kept only where it lowers the largest distance without folding a face.
   bool fitSurface = true;
+  // The local solver only: vertices (#V, 1 = fixed) that keep their place, and the faces at them the plane their
+  // corners give at the start (they should be planar then), for a solve of part of a mesh with its rim held (the
+  // pipeline's rounds against folds solve only around their changes).
+  const std::vector<char>* fixedVertices = nullptr;
 };
 
 struct IterationLog {
