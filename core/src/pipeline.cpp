@@ -738,12 +738,22 @@ PlanarizeOptions planarizeOptions(const PipelineParams& params, TriangulationMet
 }
 
 // Rounds of changes against the faces a solve could make planar only by folding (flipFoldsAway); they stop earlier
-// where a round leaves no fold or gains less than a tenth. With the merges choosing among the neighbours about
+// where a round leaves no fold or gains too little (kFoldGain). With the merges choosing among the neighbours about
 // as well along (kMergeAlongSlack), more rounds pay: on the 40-run sweep 3, 4, 5, 6 and 8 rounds cut 251, 179,
 // 147, 122 and 114 interior faces (nodes of four 542, 405, 348, 297, 284; hexagons 93.51, 93.57, 93.60, 93.62,
 // 93.61 %), the 48 perturbed runs 637 -> 475 at 5 (91.70 -> 91.78 %); the 20k-triangle bumps upload at 10k faces
 // 19, 9 and 8 in 1.36, 1.50 and 1.62 s (3, 5, 6). (Before that choice, 3, 4 and 5 rounds cut 301, 280 and 279.)
-constexpr int kFoldRounds = 5;
+// Once the rounds after the first solved only around their changes (solveAround), each costs less and leaves fewer
+// folds behind: 5, 7 and 9 rounds cut 89, 66 and 66 faces on the 40-run sweep (nodes of four 220, 176, 176), 189,
+// 155 and 155 on the 48 perturbed runs; kept while the folds drop by 3 % (kFoldGain) instead of a tenth, 7 and 9
+// rounds cut 54 and 54 (nodes of four 153), the perturbed runs 101 and 101 (259), hexagons 93.67 and 92.10 % (93.65
+// and 92.08 % at 5 rounds), for 10-15 % more time over the sweeps. The uploaded bumps at 100k faces: folds 2080,
+// 998, 655, 616 (less than a tenth fewer: round 2 kept), then 452, 329, 248, 181, 130, ... 71 at 12 rounds; cut
+// 695 faces at 3 rounds, 184 at 7 and 73 at 12 (95.7, 96.4, 96.6 % hexagons; 15, 25, 27 s). (Repairing only the
+// stars within two rings of a round's changes saved little, 26.4 against 28.2 s at 100k, and cut more: 69 and 133
+// faces on the two sweeps.)
+constexpr int kFoldRounds = 7;
+constexpr double kFoldGain = 0.97;  // a round is kept where it leaves at most this share of the folds before
 // Not where more faces than this share fold: a coarse or noisy upload (the shared models: a fifth to a third),
 // whose flips took its hexagons from 94 % to 54 % (the car at 3000 faces), and whose collapses (below) 92 to 61 %.
 constexpr double kFoldFlipShare = 0.08;
@@ -839,7 +849,11 @@ std::optional<PlanarizeReport> solveAround(PolyMesh& hex, const PolyMesh& before
       if (!touches) continue;
       std::vector<int> face(n);
       for (int i = 0; i < n; ++i) {
-        if (id[ids[i]] < 0) id[ids[i]] = static_cast<int>(of.size()), of.push_back(ids[i]), fixed.push_back(!region[ids[i]]);
+        if (id[ids[i]] < 0) {
+          id[ids[i]] = static_cast<int>(of.size());
+          of.push_back(ids[i]);
+          fixed.push_back(!region[ids[i]]);
+        }
         face[i] = id[ids[i]];
       }
       part.addFace(face);
@@ -874,8 +888,8 @@ std::optional<PlanarizeReport> solveAround(PolyMesh& hex, const PolyMesh& before
 //    (not at a vertex of three triangles, not where the quad is not convex in the tangent plane or its other
 //    diagonal is an edge already);
 // then the stars are repaired and the solve runs again (around the changes alone: solveAround); kept while the
-// folds drop by a tenth or more. Every node stays one of three faces (the dual of a triangulation), where a cut of
-// a folded face makes two nodes of four.
+// folds drop by 3 % or more (kFoldGain). Every node stays one of three faces (the dual of a triangulation), where a
+// cut of a folded face makes two nodes of four.
 // Measured on the uploaded bumps at 10k faces: folds 382 -> 190 -> 94 -> 64 -> 52 -> 20 over five rounds of
 // collapses, 382 -> 185 -> 153 with flips alone; merged along the steeper direction instead, or along the
 // shortest edge, the 40-run sweep cut 1115 and 859 faces, against 230 along the flatter one (METHOD.md).
@@ -919,7 +933,7 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
       kept.folded = static_cast<int>(folded.size());
       break;
     }
-    if (folded.size() > 0.9 * double(bestFolds)) break;  // gained less than a tenth: the round before stands
+    if (folded.size() > kFoldGain * double(bestFolds)) break;  // gained too little: the round before stands
     best = t, bestFolds = folded.size(), kept = done;
     kept.folded = static_cast<int>(folded.size());
     keptDual = std::move(dual);
