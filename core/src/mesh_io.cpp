@@ -780,13 +780,7 @@ class Welder {
   }
   int add(double x, double y, double z) {
     const double p[3] = {x + 0.0, y + 0.0, z + 0.0};  // + 0.0 turns -0 into +0
-    std::uint64_t h = 1469598103934665603ull;
-    for (double c : p) {
-      std::uint64_t bits;
-      std::memcpy(&bits, &c, 8);
-      h = (h ^ bits) * 1099511628211ull;
-      h ^= h >> 29;
-    }
+    const std::uint64_t h = exactPointHash(x, y, z);
     const std::size_t mask = table_.size() - 1;
     for (std::size_t slot = h & mask;; slot = (slot + 1) & mask) {
       const int id = table_[slot];

@@ -799,15 +799,7 @@ std::optional<PlanarizeReport> solveAround(PolyMesh& hex, const PolyMesh& before
     bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
   };
   struct KeyHash {
-    std::size_t operator()(const Key& k) const {
-      std::uint64_t h = 1469598103934665603ull;
-      for (double d : {k.x, k.y, k.z}) {
-        std::uint64_t b;
-        std::memcpy(&b, &d, sizeof b);
-        h = (h ^ b) * 1099511628211ull;
-      }
-      return static_cast<std::size_t>(h ^ (h >> 29));
-    }
+    std::size_t operator()(const Key& k) const { return static_cast<std::size_t>(exactPointHash(k.x, k.y, k.z)); }
   };
   std::unordered_map<Key, int, KeyHash> old;
   old.reserve(static_cast<std::size_t>(before.V.rows()));
@@ -820,16 +812,15 @@ std::optional<PlanarizeReport> solveAround(PolyMesh& hex, const PolyMesh& before
     if (it == old.end()) region[i] = 1;
     else start.row(i) = solved.V.row(it->second);
   }
+  auto touches = [&](int f) {  // a face with a point of the region
+    const int* ids = hex.face(f);
+    return std::any_of(ids, ids + hex.faceSize(f), [&](int v) { return region[v] != 0; });
+  };
   for (int ring = 0; ring < kResolveRings; ++ring) {
     std::vector<char> grown = region;
-    for (int f = 0; f < nf; ++f) {
-      const int n = hex.faceSize(f);
-      const int* ids = hex.face(f);
-      bool touches = false;
-      for (int i = 0; i < n && !touches; ++i) touches = region[ids[i]];
-      if (touches)
-        for (int i = 0; i < n; ++i) grown[ids[i]] = 1;
-    }
+    for (int f = 0; f < nf; ++f)
+      if (touches(f))
+        for (int i = 0; i < hex.faceSize(f); ++i) grown[hex.face(f)[i]] = 1;
     region.swap(grown);
   }
   const auto free = std::count(region.begin(), region.end(), char(1));
@@ -842,11 +833,9 @@ std::optional<PlanarizeReport> solveAround(PolyMesh& hex, const PolyMesh& before
     std::vector<int> id(static_cast<std::size_t>(nv), -1), of;
     std::vector<char> fixed;
     for (int f = 0; f < nf; ++f) {
+      if (!touches(f)) continue;
       const int n = hex.faceSize(f);
       const int* ids = hex.face(f);
-      bool touches = false;
-      for (int i = 0; i < n && !touches; ++i) touches = region[ids[i]];
-      if (!touches) continue;
       std::vector<int> face(n);
       for (int i = 0; i < n; ++i) {
         if (id[ids[i]] < 0) {

@@ -258,20 +258,19 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
   // the face's diameter D. Measuring every face's margin again after every plane fit took a third of the
   // local solver's time at 100k faces; late in a solve the planes hardly turn.
   std::vector<double> foldMargin(nf, -1.0);
-  // Faces at a fixed vertex keep the plane their corners first gave (PlanarizeOptions::fixedVertices).
-  std::vector<char> heldPlane;
-  if (options.fixedVertices) {
-    heldPlane.assign(nf, 0);
-    for (int f = 0; f < nf; ++f)
-      for (int i = 0; i < mesh.faceSize(f); ++i) heldPlane[f] |= (*options.fixedVertices)[mesh.face(f)[i]];
-  }
+  // Vertices that keep their place, and the faces at them the plane their corners first gave
+  // (PlanarizeOptions::fixedVertices).
+  const std::vector<char>* fixed = options.fixedVertices;
+  auto isFixed = [&](int v) { return fixed && (*fixed)[v]; };
+  std::vector<char> heldPlane(fixed ? nf : 0, 0);
+  for (int f = 0; f < static_cast<int>(heldPlane.size()); ++f)
+    for (int i = 0; i < mesh.faceSize(f); ++i) heldPlane[f] |= isFixed(mesh.face(f)[i]);
   auto fitFace = [&](int f) {
     const int n = mesh.faceSize(f);
     const int* ids = mesh.face(f);
     const Vec3 before = normal[f];
-    if (warm && !heldPlane.empty() && heldPlane[f]) {
-      // kept
-    } else if (!refinePlane(mesh, f, warm, normal[f], offset[f])) {
+    const bool held = warm && fixed && heldPlane[f];
+    if (!held && !refinePlane(mesh, f, warm, normal[f], offset[f])) {
       const FacePlane fp = leastSquaresPlane(mesh, f);
       normal[f] = fp.normal;
       offset[f] = fp.normal.dot(fp.centroid);
@@ -413,8 +412,6 @@ PlanarizeReport planarizeLocalGlobal(PolyMesh& mesh, const PlanarizeOptions& opt
   };
   auto moveVertex = [&](int v, double lambda) { takeStep(v, displacement(v, lambda)); };
   std::vector<Vec3> steps(nv);
-  const std::vector<char>* fixed = options.fixedVertices;
-  auto isFixed = [&](int v) { return fixed && (*fixed)[v]; };
   auto vertexStep = [&](double lambda) {
     parallelRanges(nv, kFacesPerThread, [&](int begin, int end) {
       for (int v = begin; v < end; ++v)

@@ -2,6 +2,8 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -18,6 +20,19 @@ using Box3 = Eigen::AlignedBox3d;
 inline int gridCell(double x, int n) {
   const double q = std::floor(x);
   return q >= 0 ? (q < n ? static_cast<int>(q) : n - 1) : 0;
+}
+
+// A hash of a point's coordinates bit for bit, -0 taken as +0, so that points equal by == hash alike (for tables
+// keyed on exact coordinates: the STL reader's welding, the rounds against folds matching a dual's points).
+inline std::uint64_t exactPointHash(double x, double y, double z) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (double c : {x + 0.0, y + 0.0, z + 0.0}) {  // + 0.0 turns -0 into +0
+    std::uint64_t bits;
+    std::memcpy(&bits, &c, sizeof bits);
+    h = (h ^ bits) * 1099511628211ull;
+    h ^= h >> 29;
+  }
+  return h;
 }
 
 // The point of segment ab nearest to p (a when the segment has no length).
