@@ -542,10 +542,11 @@ int shareRulingPlanes(const TriMesh& T, std::vector<LocalGeometry>& geo, bool ru
 // The dual mesh with every triangle's point placed by `place(f, frame, x)`, which returns false where it fell
 // back to the centroid (x is then the centroid).
 template <typename Place>
-DualMesh dualWith(const Triangulation& tri, const Surface& surface, Place place, bool untangle = false) {
+DualMesh dualWith(const Triangulation& tri, const Surface& surface, Place place, bool untangle = false,
+                  GeometryCache* cache = nullptr) {
   const TriMesh& T = tri.mesh;
   const int nf = static_cast<int>(T.F.rows());
-  std::vector<LocalGeometry> geo = vertexGeometry(tri, surface);
+  std::vector<LocalGeometry> geo = vertexGeometry(tri, surface, cache);
   const auto* mesh = dynamic_cast<const MeshSurface*>(&surface);
   const bool rulings = shareRulingPlanes(T, geo, mesh && mesh->developable()) > 0;
   const VertexRings rings = vertexRings(T);
@@ -568,7 +569,7 @@ DualMesh dualWith(const Triangulation& tri, const Surface& surface, Place place,
 
 }  // namespace
 
-DualMesh dupinDual(const Triangulation& tri, const Surface& surface, bool untangle) {
+DualMesh dupinDual(const Triangulation& tri, const Surface& surface, bool untangle, GeometryCache* cache) {
   const TriMesh& T = tri.mesh;
   return dualWith(tri, surface, [&](const std::vector<LocalGeometry>& geo, int f, const TriangleFrame& fr, Vec3& x) {
     const LocalGeometry* g[3] = {&geo[T.F(f, 0)], &geo[T.F(f, 1)], &geo[T.F(f, 2)]};
@@ -621,7 +622,7 @@ DualMesh dupinDual(const Triangulation& tri, const Surface& surface, bool untang
       if (kmax * fr.longestEdge > 1e-6) return tangentPoint(geo, T, f, fr, x, kStraddlingPlanes);
     }
     return tangentPoint(geo, T, f, fr, x);
-  }, untangle);
+  }, untangle, cache);
 }
 
 DualMesh tangentDual(const Triangulation& tri, const Surface& surface) {

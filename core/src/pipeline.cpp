@@ -902,11 +902,12 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
   const double vertices = static_cast<double>(t.mesh.V.rows());
   const double floor = params.cell > 0 ? 0.0 : kCollapseFloor * params.faces;
   const int budget = t.uv.empty() ? static_cast<int>(std::max(0.0, std::min(kCollapseShare * vertices, vertices - floor))) : 0;
+  GeometryCache geometry;  // the vertices' closest points, from one look-up to the next (most vertices stay)
   for (int round = 0; round <= kFoldRounds; ++round) {
     checkCancel(cancel);
     if (progress)
       progress({"triangulate", 0.9 + 0.015 * round, "edge collapses and flips against folds, solve " + std::to_string(round + 1)});
-    DualMesh dual = dupinDual(t, surface);
+    DualMesh dual = dupinDual(t, surface, true, &geometry);
     PolyMesh hex = dual.mesh;
     std::optional<PlanarizeReport> around;
     if (round > 0) around = solveAround(hex, keptDual->mesh, keptSolve->hex, po, cancel);
@@ -1109,7 +1110,7 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     }
     // Its note is said once, with the changes' (the caller's).
     const std::size_t notes = t.notes.size();
-    const RepairResult r = repairStars(t, surface);
+    const RepairResult r = repairStars(t, surface, kRepairSweeps, &geometry);
     t.notes.resize(notes);
     done.repair.moved += r.moved, done.repair.flips += r.flips;
   }

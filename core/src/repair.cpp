@@ -563,12 +563,12 @@ int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo) 
 
 }  // namespace
 
-RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps) {
+RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps, GeometryCache* cache) {
   if (triangulation.mesh.F.rows() == 0 || maxSweeps <= 0) return {};
   RepairResult r;
   std::vector<LocalGeometry> geometry;
   {
-    Repair repair(triangulation, surface);
+    Repair repair(triangulation, surface, cache ? vertexGeometry(triangulation, surface, cache) : std::vector<LocalGeometry>{});
     r = repair.run(maxSweeps);
     geometry = repair.takeGeometry();
   }

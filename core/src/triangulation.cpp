@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <optional>
 
@@ -176,15 +177,51 @@ Triangulation rowLattice(const ParametricSurface& surface, double cell, bool str
 
 }  // namespace
 
-std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface& surface) {
+GeometryCache::Key GeometryCache::keyOf(const Vec3& p) {
+  Key k;
+  std::memcpy(&k.x, &p.x(), sizeof k.x);
+  std::memcpy(&k.y, &p.y(), sizeof k.y);
+  std::memcpy(&k.z, &p.z(), sizeof k.z);
+  return k;
+}
+
+std::size_t GeometryCache::KeyHash::operator()(const Key& k) const {
+  double c[3];
+  std::memcpy(&c[0], &k.x, sizeof k.x);
+  std::memcpy(&c[1], &k.y, sizeof k.y);
+  std::memcpy(&c[2], &k.z, sizeof k.z);
+  return static_cast<std::size_t>(exactPointHash(c[0], c[1], c[2]));
+}
+
+const LocalGeometry* GeometryCache::find(const Vec3& p) const {
+  const auto it = table_.find(keyOf(p));
+  return it == table_.end() ? nullptr : &it->second;
+}
+
+void GeometryCache::keep(const Points& V, const std::vector<LocalGeometry>& geometry) {
+  table_.clear();
+  table_.reserve(geometry.size());
+  for (std::size_t v = 0; v < geometry.size(); ++v)
+    table_.emplace(keyOf(V.row(static_cast<Eigen::Index>(v)).transpose()), geometry[v]);
+}
+
+std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface& surface, GeometryCache* cache) {
   const int nv = static_cast<int>(t.mesh.V.rows());
   std::vector<LocalGeometry> geo(nv);
   const auto* parametric = dynamic_cast<const ParametricSurface*>(&surface);
   const bool exact = parametric && static_cast<int>(t.uv.size()) == nv;
+  if (exact) cache = nullptr;  // from the parameters, not the points
+  std::vector<char> found(cache ? nv : 0, 0);
+  if (cache)
+    for (int v = 0; v < nv; ++v)
+      if (const LocalGeometry* g = cache->find(t.mesh.V.row(v).transpose())) geo[v] = *g, found[v] = 1;
   parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
-    for (int v = begin; v < end; ++v)
+    for (int v = begin; v < end; ++v) {
+      if (cache && found[v]) continue;
       geo[v] = exact ? parametric->geometryAt(t.uv[v].x(), t.uv[v].y()) : surface.closestPoint(t.mesh.V.row(v).transpose());
+    }
   });
+  if (cache) cache->keep(t.mesh.V, geo);
   return geo;
 }
 

@@ -33,7 +33,9 @@ enum class Duality { Dupin, Tangent, Auto };
 // With `untangle`, interior faces that cross themselves where their star straddles a parabolic curve get
 // their corners' points placed by the tangent planes or at the centroid instead, where fewer faces then cross
 // (DualMesh::untangled counts them).
-DualMesh dupinDual(const Triangulation& triangulation, const Surface& surface, bool untangle = true);
+// `cache`: the vertices' geometry as vertexGeometry found it before (see GeometryCache), or null.
+DualMesh dupinDual(const Triangulation& triangulation, const Surface& surface, bool untangle = true,
+                   GeometryCache* cache = nullptr);
 
 // Tangent duality (§4.1): the dual vertex of each triangle is the intersection of the tangent planes at
 // its three vertices. Where the planes are nearly parallel (near parabolic points or on tiny triangles)

@@ -1,7 +1,9 @@
 // phex — triangulations of a surface and their checks (§4.2, §5).
 #pragma once
+#include <cstdint>
 #include <map>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "phex/mesh.hpp"
@@ -30,8 +32,32 @@ struct Triangulation {
   std::vector<FieldSingularity> singularities;
 };
 
-// The local geometry at every vertex: exact from `uv` on a parametric surface, else from closestPoint.
-std::vector<LocalGeometry> vertexGeometry(const Triangulation& triangulation, const Surface& surface);
+// The surface's closest points (closestPoint) at the vertices of a triangulation as vertexGeometry last found
+// them, by the vertices' coordinates bit for bit: rounds that change a triangulation here and there (the
+// pipeline's rounds against folds) look up only the vertices that moved. Each call of vertexGeometry with it
+// keeps the geometry of that call's vertices alone.
+class GeometryCache {
+ public:
+  // The geometry at p, or null where p was not among the vertices of the last call.
+  const LocalGeometry* find(const Vec3& p) const;
+  void keep(const Points& V, const std::vector<LocalGeometry>& geometry);
+
+ private:
+  struct Key {
+    std::uint64_t x, y, z;  // the coordinates' bits
+    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+  };
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const;
+  };
+  static Key keyOf(const Vec3& p);
+  std::unordered_map<Key, LocalGeometry, KeyHash> table_;
+};
+
+// The local geometry at every vertex: exact from `uv` on a parametric surface, else from closestPoint (the
+// vertices found in `cache` taken from there, and the cache then left with these vertices').
+std::vector<LocalGeometry> vertexGeometry(const Triangulation& triangulation, const Surface& surface,
+                                          GeometryCache* cache = nullptr);
 
 // Area of a surface: the sum of its triangles for an uploaded mesh, a 64 x 64 midpoint rule over the
 // parameter domain for an analytic surface.
@@ -92,7 +118,10 @@ struct RepairResult {
   int sweeps = 0;
   int flips = 0;                            // edges flipped where moves alone left a star invalid
 };
-RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps = 12);
+// `cache`: the vertices' geometry as vertexGeometry found it before (see GeometryCache), or null.
+inline constexpr int kRepairSweeps = 12;
+RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps = kRepairSweeps,
+                         GeometryCache* cache = nullptr);
 
 // Drops the slivers along an open boundary: a triangle on a boundary edge whose third corner is an interior
 // vertex no higher than `ratio` times that edge above it (where the last row ran along the boundary, or
