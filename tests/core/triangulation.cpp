@@ -1,6 +1,7 @@
 #include <catch.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include "phex/duality.hpp"
@@ -120,4 +121,62 @@ TEST_CASE("triangulation: slivers along an open boundary are dropped, the rest k
   for (int f = 0; f < t.mesh.F.rows(); ++f)
     for (int c = 0; c < 3; ++c) ++uses[t.mesh.F(f, c)];
   CHECK(*std::min_element(uses.begin(), uses.end()) > 0);
+}
+
+namespace {
+
+// A surface that counts its closest-point look-ups (over threads) and leaves the rest to another.
+class CountingSurface : public Surface {
+ public:
+  explicit CountingSurface(const Surface& s) : s_(s) {}
+  std::string name() const override { return s_.name(); }
+  LocalGeometry closestPoint(const Vec3& p) const override {
+    ++lookups;
+    return s_.closestPoint(p);
+  }
+  Box3 bounds() const override { return s_.bounds(); }
+  bool isClosed() const override { return s_.isClosed(); }
+  std::vector<LocalGeometry> samples(int count) const override { return s_.samples(count); }
+  std::vector<std::vector<Vec3>> boundaryCurves() const override { return s_.boundaryCurves(); }
+  mutable std::atomic<int> lookups{0};
+
+ private:
+  const Surface& s_;
+};
+
+bool sameGeometry(const LocalGeometry& a, const LocalGeometry& b) {
+  return a.point == b.point && a.normal == b.normal && a.d1 == b.d1 && a.d2 == b.d2 && a.k1 == b.k1 && a.k2 == b.k2;
+}
+
+}  // namespace
+
+TEST_CASE("triangulation: a geometry cache looks up only the vertices that moved, bit for bit as without it") {
+  const ParametricSurfacePtr torus = makeSurface("torus");
+  const CountingSurface s(*torus);
+  Triangulation t = latticeTriangulation(*torus, cellForFaceCount(*torus, 500));
+  t.uv.clear();  // by closest points, as an upload's vertices
+  const int nv = static_cast<int>(t.mesh.V.rows());
+  GeometryCache cache;
+  const std::vector<LocalGeometry> first = vertexGeometry(t, s, &cache);
+  CHECK(s.lookups == nv);
+  // Three vertices moved: three look-ups, and the same geometry as a call without the cache.
+  const Points laid = t.mesh.V;
+  for (int v : {0, 7, 42}) t.mesh.V.row(v) = torus->closestPoint(laid.row(v).transpose() + Vec3(0.01, 0.02, 0)).point.transpose();
+  s.lookups = 0;
+  const std::vector<LocalGeometry> second = vertexGeometry(t, s, &cache);
+  CHECK(s.lookups == 3);
+  const std::vector<LocalGeometry> fresh = vertexGeometry(t, s);
+  for (int v = 0; v < nv; ++v) REQUIRE(sameGeometry(second[v], fresh[v]));
+  CHECK(sameGeometry(second[1], first[1]));
+  CHECK_FALSE(sameGeometry(second[7], first[7]));
+  // The cache keeps the last call's vertices alone: a vertex put back where it was is looked up again.
+  t.mesh.V.row(7) = laid.row(7);
+  s.lookups = 0;
+  const std::vector<LocalGeometry> third = vertexGeometry(t, s, &cache);
+  CHECK(s.lookups == 1);
+  CHECK(sameGeometry(third[7], first[7]));
+  // The Dupin dual through the cache is the dual without it.
+  const DualMesh cached = dupinDual(t, s, true, &cache), plain = dupinDual(t, s);
+  CHECK(cached.mesh.V == plain.mesh.V);
+  CHECK(cached.mesh.indices == plain.mesh.indices);
 }
