@@ -35,7 +35,7 @@ struct Triangulation {
 // The surface's closest points (closestPoint) at the vertices of a triangulation as vertexGeometry last found
 // them, by the vertices' coordinates bit for bit: rounds that change a triangulation here and there (the
 // pipeline's rounds against folds) look up only the vertices that moved. Each call of vertexGeometry with it
-// keeps the geometry of that call's vertices alone.
+// keeps the geometry of that call's vertices alone. One cache serves one surface.
 class GeometryCache {
  public:
   // The geometry at p, or null where p was not among the vertices of the last call.
@@ -118,8 +118,8 @@ struct RepairResult {
   int sweeps = 0;
   int flips = 0;                            // edges flipped where moves alone left a star invalid
 };
-// `cache`: the vertices' geometry as vertexGeometry found it before (see GeometryCache), or null.
 inline constexpr int kRepairSweeps = 12;
+// `cache`: the vertices' geometry as vertexGeometry found it before (see GeometryCache), or null.
 RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps = kRepairSweeps,
                          GeometryCache* cache = nullptr);
 
