@@ -326,7 +326,7 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
     return cache[k][a];
   };
 
-  auto clip = [&](int f) {
+  auto clip = [&](int f, double tolerance) {  // the curve followed to `tolerance` mean edges
     Clipped c;
     const int n = mesh.faceSize(f);
     const int* ids = mesh.face(f);
@@ -422,7 +422,7 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
           offA = offB = false;
         }
       }
-      const std::vector<char> keep = thinPolyline(piece, kClipTolerance * h);
+      const std::vector<char> keep = thinPolyline(piece, tolerance * h);
       c.junctions.push_back(a);
       c.ids.push_back(a);
       position.push_back(ea.w);
@@ -481,7 +481,8 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
   for (bool changed = true; changed;) {
     changed = false;
     for (std::size_t k = 0; k < panels.size(); ++k) {
-      result[k] = clip(panels[k]);
+      result[k] = clip(panels[k], kClipTolerance);
+      if (!result[k].ok) result[k] = clip(panels[k], kClipRetryTolerance);
       if (result[k].ok) continue;
       // Its ends are those of the original runs: the face's boundary nodes next to a two-face edge.
       const int f = panels[k], n = mesh.faceSize(f);
