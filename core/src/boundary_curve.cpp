@@ -482,7 +482,8 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
     changed = false;
     for (std::size_t k = 0; k < panels.size(); ++k) {
       result[k] = clip(panels[k], kClipTolerance);
-      if (!result[k].ok) result[k] = clip(panels[k], kClipRetryTolerance);
+      for (double tolerance : kClipRetryTolerances)
+        if (!result[k].ok) result[k] = clip(panels[k], tolerance);
       if (result[k].ok) continue;
       // Its ends are those of the original runs: the face's boundary nodes next to a two-face edge.
       const int f = panels[k], n = mesh.faceSize(f);

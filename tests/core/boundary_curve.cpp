@@ -222,7 +222,7 @@ TEST_CASE("pipeline: an uploaded shell's boundary panels are clipped to its boun
   CHECK(r.metrics.selfIntersectingCount == 0);
   CHECK(r.boundaryClip.panels > 60);
   // Every one clipped: one whose clipped polygon crossed itself with the curve followed to kClipTolerance is
-  // clipped with fewer of its points (kClipRetryTolerance); it was left as it was before that retry.
+  // clipped with fewer of its points (kClipRetryTolerances); it was left as it was before that retry.
   CHECK(r.boundaryClip.skipped == 0);
   CHECK(r.boundaryClip.nodesAdded > 40);
   CHECK(r.boundaryOffset.median <= 1e-3);

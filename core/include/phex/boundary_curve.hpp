@@ -78,18 +78,20 @@ BoundaryOffset boundaryOffset(const PolyMesh& mesh, const Surface& surface);
 // filler's corner: below). The
 // curve's points are thinned (Douglas-Peucker) to kClipTolerance mean edges, kept at least kClipSpacing apart, and
 // those standing higher over the panel's plane than a moved node may lie off the surface left out. A panel whose clipped polygon would
-// cross itself or turn over is clipped again with the curve followed to kClipRetryTolerance mean edges (fewer
-// corners); where that fails too it keeps its boundary edges as they were (`skipped`). On the 40-run sweep the
-// retry clipped 8 of the 15 panels skipped before, on the shared models at 1500 and 3000 faces 10 of 21, with
-// no coverage gap or planarity changed; following the curve by straight chords between the ends instead clipped
-// one more but left the six_s0 model at 1500 faces a gap of 0.28 mean edges where it had 0.14.
+// cross itself or turn over is clipped again with the curve followed to kClipRetryTolerances mean edges in turn
+// (fewer corners); where that fails too it keeps its boundary edges as they were (`skipped`). On the 40-run sweep
+// the retries clipped 9 of the 15 panels skipped before, on the shared models at 1500 and 3000 faces 11 of 21 (a
+// tenth: 8 and 10), with no planarity changed and one coverage gap closer (the uploaded bumps at 3000 faces 0.27
+// -> 0.14 mean edges); following the curve by straight chords between the ends instead clipped one more but left
+// the six_s0 model at 1500 faces a gap of 0.28 mean edges where it had 0.14.
 // A shared node that stays more than kFillerOff mean edges off the curve (its edge runs along the wall: where the
 // boundary runs near an asymptotic direction, the two panels' planes meet along it) would leave a tooth in the
 // outline; instead each of its two panels ends at a corner on the curve kFillerSpan mean edges (or half the node's
 // distance, where more) from the node's nearest point, and a triangle (planar whatever its corners) fills the gap between them: the outline follows the
 // curve and the node joins three panels (`fillers`).
 constexpr double kClipReach = 1.5;
-constexpr double kClipTolerance = 0.005, kClipRetryTolerance = 0.1;
+constexpr double kClipTolerance = 0.005;
+constexpr double kClipRetryTolerances[] = {0.1, 0.3};
 constexpr double kClipSpacing = 0.2;
 constexpr double kFillerOff = 0.1, kFillerSpan = 0.25;
 struct BoundaryClip {
