@@ -82,8 +82,8 @@ BoundaryOffset boundaryOffset(const PolyMesh& mesh, const Surface& surface);
 // (fewer corners); where that fails too it keeps its boundary edges as they were (`skipped`). On the 40-run sweep
 // the retries clipped 9 of the 15 panels skipped before, on the shared models at 1500 and 3000 faces 11 of 21 (a
 // tenth: 8 and 10), with no planarity changed and one coverage gap closer (the uploaded bumps at 3000 faces 0.27
-// -> 0.14 mean edges); following the curve by straight chords between the ends instead clipped one more but left
-// the six_s0 model at 1500 faces a gap of 0.28 mean edges where it had 0.14.
+// -> 0.14 mean edges); straight chords between the ends as the fallback clipped about as many but left the six_s0
+// model at 1500 faces a gap of 0.28 mean edges where it had 0.14.
 // A shared node that stays more than kFillerOff mean edges off the curve (its edge runs along the wall: where the
 // boundary runs near an asymptotic direction, the two panels' planes meet along it) would leave a tooth in the
 // outline; instead each of its two panels ends at a corner on the curve kFillerSpan mean edges (or half the node's
