@@ -794,21 +794,14 @@ std::optional<PlanarizeReport> solveAround(PolyMesh& hex, const PolyMesh& before
                                            const PlanarizeOptions& po, const CancelFlag* cancel) {
   const int nv = static_cast<int>(hex.V.rows()), nf = hex.faceCount();
   if (before.V.rows() != solved.V.rows()) return std::nullopt;
-  struct Key {
-    double x, y, z;
-    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
-  };
-  struct KeyHash {
-    std::size_t operator()(const Key& k) const { return static_cast<std::size_t>(exactPointHash(k.x, k.y, k.z)); }
-  };
-  std::unordered_map<Key, int, KeyHash> old;
+  std::unordered_map<ExactPoint, int, ExactPointHasher> old;
   old.reserve(static_cast<std::size_t>(before.V.rows()));
-  for (int j = 0; j < before.V.rows(); ++j) old.emplace(Key{before.V(j, 0), before.V(j, 1), before.V(j, 2)}, j);
+  for (int j = 0; j < before.V.rows(); ++j) old.emplace(ExactPoint{before.V(j, 0), before.V(j, 1), before.V(j, 2)}, j);
   std::vector<char> region(static_cast<std::size_t>(nv), 0);
   const Points dupin = hex.V;
   Points start = hex.V;  // the old solve's points where the Dupin points are the old ones
   for (int i = 0; i < nv; ++i) {
-    const auto it = old.find(Key{hex.V(i, 0), hex.V(i, 1), hex.V(i, 2)});
+    const auto it = old.find(ExactPoint{hex.V(i, 0), hex.V(i, 1), hex.V(i, 2)});
     if (it == old.end()) region[i] = 1;
     else start.row(i) = solved.V.row(it->second);
   }

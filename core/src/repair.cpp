@@ -568,7 +568,7 @@ RepairResult repairStars(Triangulation& triangulation, const Surface& surface, i
   RepairResult r;
   std::vector<LocalGeometry> geometry;
   {
-    Repair repair(triangulation, surface, cache ? vertexGeometry(triangulation, surface, cache) : std::vector<LocalGeometry>{});
+    Repair repair(triangulation, surface, vertexGeometry(triangulation, surface, cache));
     r = repair.run(maxSweeps);
     geometry = repair.takeGeometry();
   }

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <optional>
 
@@ -177,24 +176,8 @@ Triangulation rowLattice(const ParametricSurface& surface, double cell, bool str
 
 }  // namespace
 
-GeometryCache::Key GeometryCache::keyOf(const Vec3& p) {
-  Key k;
-  std::memcpy(&k.x, &p.x(), sizeof k.x);
-  std::memcpy(&k.y, &p.y(), sizeof k.y);
-  std::memcpy(&k.z, &p.z(), sizeof k.z);
-  return k;
-}
-
-std::size_t GeometryCache::KeyHash::operator()(const Key& k) const {
-  double c[3];
-  std::memcpy(&c[0], &k.x, sizeof k.x);
-  std::memcpy(&c[1], &k.y, sizeof k.y);
-  std::memcpy(&c[2], &k.z, sizeof k.z);
-  return static_cast<std::size_t>(exactPointHash(c[0], c[1], c[2]));
-}
-
 const LocalGeometry* GeometryCache::find(const Vec3& p) const {
-  const auto it = table_.find(keyOf(p));
+  const auto it = table_.find(ExactPoint{p.x(), p.y(), p.z()});
   return it == table_.end() ? nullptr : &it->second;
 }
 
@@ -202,7 +185,7 @@ void GeometryCache::keep(const Points& V, const std::vector<LocalGeometry>& geom
   table_.clear();
   table_.reserve(geometry.size());
   for (std::size_t v = 0; v < geometry.size(); ++v)
-    table_.emplace(keyOf(V.row(static_cast<Eigen::Index>(v)).transpose()), geometry[v]);
+    table_.emplace(ExactPoint{V(Eigen::Index(v), 0), V(Eigen::Index(v), 1), V(Eigen::Index(v), 2)}, geometry[v]);
 }
 
 std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface& surface, GeometryCache* cache) {

@@ -23,7 +23,8 @@ inline int gridCell(double x, int n) {
 }
 
 // A hash of a point's coordinates bit for bit, -0 taken as +0, so that points equal by == hash alike (for tables
-// keyed on exact coordinates: the STL reader's welding, the rounds against folds matching a dual's points).
+// keyed on exact coordinates: the STL reader's welding, the rounds against folds matching a dual's points and
+// looking up closest points).
 inline std::uint64_t exactPointHash(double x, double y, double z) {
   std::uint64_t h = 1469598103934665603ull;
   for (double c : {x + 0.0, y + 0.0, z + 0.0}) {  // + 0.0 turns -0 into +0
@@ -34,6 +35,14 @@ inline std::uint64_t exactPointHash(double x, double y, double z) {
   }
   return h;
 }
+// A point as the key of a hash table on exact coordinates: equal by == (-0 and +0 one key), hashed alike.
+struct ExactPoint {
+  double x, y, z;
+  bool operator==(const ExactPoint& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct ExactPointHasher {
+  std::size_t operator()(const ExactPoint& p) const { return static_cast<std::size_t>(exactPointHash(p.x, p.y, p.z)); }
+};
 
 // The point of segment ab nearest to p (a when the segment has no length).
 inline Vec3 closestPointOnSegment(const Vec3& p, const Vec3& a, const Vec3& b) {

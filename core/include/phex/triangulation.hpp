@@ -1,6 +1,5 @@
 // phex — triangulations of a surface and their checks (§4.2, §5).
 #pragma once
-#include <cstdint>
 #include <map>
 #include <string>
 #include <unordered_map>
@@ -33,9 +32,9 @@ struct Triangulation {
 };
 
 // The surface's closest points (closestPoint) at the vertices of a triangulation as vertexGeometry last found
-// them, by the vertices' coordinates bit for bit: rounds that change a triangulation here and there (the
-// pipeline's rounds against folds) look up only the vertices that moved. Each call of vertexGeometry with it
-// keeps the geometry of that call's vertices alone. One cache serves one surface.
+// them, by the vertices' exact coordinates: rounds that change a triangulation here and there (the pipeline's
+// rounds against folds) look up only the vertices that moved. Each call of vertexGeometry with it keeps the
+// geometry of that call's vertices alone. One cache serves one surface.
 class GeometryCache {
  public:
   // The geometry at p, or null where p was not among the vertices of the last call.
@@ -43,15 +42,7 @@ class GeometryCache {
   void keep(const Points& V, const std::vector<LocalGeometry>& geometry);
 
  private:
-  struct Key {
-    std::uint64_t x, y, z;  // the coordinates' bits
-    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
-  };
-  struct KeyHash {
-    std::size_t operator()(const Key& k) const;
-  };
-  static Key keyOf(const Vec3& p);
-  std::unordered_map<Key, LocalGeometry, KeyHash> table_;
+  std::unordered_map<ExactPoint, LocalGeometry, ExactPointHasher> table_;
 };
 
 // The local geometry at every vertex: exact from `uv` on a parametric surface, else from closestPoint (the
