@@ -502,6 +502,38 @@ constexpr double kSectionMixed = 0.25;
 // Below this share of the surface covered a triangulation is an error (CannotTile), not a result.
 constexpr double kMinCoverage = 0.25;
 
+// The trial lays' size (chooseStart) for `faces` asked: half of them, within [50, 1000].
+int trialFacesFor(int faces) { return std::clamp(faces / 2, 50, 1000); }
+
+// Uploads under auto keep Method 2 only where its trial lays take one system of rows (the wave roof, a cylinder);
+// on the free-form models they take several and the global method tiles them, so the trials (four to nine lays
+// of up to 1000 faces, some at full size) only found that out. So where they would be larger, one lay from the
+// middle of the bounds at about this many faces comes first (quickSystems); where it takes several systems of
+// rows, and so does one along plane sections where these are in question (kSectionMixed), the global method
+// tiles the upload without the trials. The same method and mesh on 16 uploads of the analytic surfaces and the
+// six shared models at 1000, 3000 and 10000 faces (48 of them by Method 2's trials), and the trials left out on
+// 13 of the 24 tiled globally: the bubble at 1000, 3000 and 10000 faces 0.90 -> 0.30, 1.93 -> 0.68, 4.37 -> 2.68 s,
+// six_s0 1.52 -> 0.52 s at 3000, the Concerthall 1.43 -> 1.00, the uploaded bumps at 10k faces 1.57 -> 1.37 s;
+// the Method 2 uploads pay the quick lay (a few hundredths of a second at 10k faces). Not the intersection shell,
+// whose quick lay takes one system (its trials two).
+constexpr int kQuickTrialFaces = 250;
+
+// The systems of rows one lay takes from the middle of the bounds at about kQuickTrialFaces where `faces` are
+// asked for at `options.cell` (0 where it cannot be laid).
+int quickSystems(const Surface& surface, const LayingOptions& options, int faces, const CancelFlag* cancel) {
+  LayingOptions o = options;
+  if (o.base == BaseFamily::Auto && !o.baseDirection) o.base = parabolicBaseFamily(surface, options);
+  o.cell = options.cell * std::sqrt(double(faces) / kQuickTrialFaces);
+  o.start = surface.bounds().center();
+  o.repairSweeps = 0;  // the rows' systems are what is asked
+  try {
+    return layTriangulation(surface, o, {}, cancel).systems;
+  } catch (const Error& e) {
+    if (e.code() == ErrorCode::Cancelled) throw;
+    return 0;
+  }
+}
+
 struct StartChoice {
   std::optional<Vec3> start;        // nullopt: the default start (nothing to choose between)
   BaseFamily base = BaseFamily::Auto;
@@ -533,7 +565,7 @@ StartChoice chooseStart(const Surface& surface, const LayingOptions& options, in
   const LocalGeometry& least = *std::min_element(samples.begin(), samples.end(), byK);
   if (most.gaussianCurvature() > 0) candidates.push_back(most.point);
   if (least.gaussianCurvature() < 0) candidates.push_back(least.point);
-  const int trialFaces = std::clamp(faces / 2, 50, 1000);
+  const int trialFaces = trialFacesFor(faces);
   trial.cell = options.cell * std::sqrt(double(faces) / trialFaces);
   int laid = 0;
   // The score of a trial lay (`rank`; `plain` without the price of irregular vertices), or nullopt where it
@@ -1420,7 +1452,34 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       // car 1.9 s, 0.7 s), are skipped and the global method tiles it.
       const int euler = closedMesh && closedMesh->isClosed() ? closedMesh->eulerCharacteristic() : 0;
       const bool singularNetwork = given.method == TriangulationMethod::Auto && params.mesh && !lo.start && euler != 0;
-      if (!lo.start && !singularNetwork) {
+      const bool principalAuto = given.method == TriangulationMethod::Auto && given.field == "principal" &&
+                                 !params.direction && params.field == "principal";
+      // Of the sections along the plan's longest extent and across it, the field of those bending more nearly one
+      // way where the upload has an umbilic in its curved part (below); else nothing.
+      struct Sections {
+        std::string field;
+        Vec3 umbilic;
+      };
+      auto sectionsInQuestion = [&]() -> std::optional<Sections> {
+        const std::optional<Vec3> umbilic = umbilicWithinCurvedPart(*t.surface);
+        const double along = umbilic ? sectionBendingMixed(*t.surface, 0) : 1.0;
+        const double across = umbilic && along > 0 ? sectionBendingMixed(*t.surface, 90) : 1.0;
+        if (!(std::min(along, across) < kSectionMixed)) return std::nullopt;
+        return Sections{across < along ? "section:90" : "section", *umbilic};
+      };
+      // An upload under auto: one quick lay first (kQuickTrialFaces), where the trials would be larger.
+      int quick = 0;
+      if (given.method == TriangulationMethod::Auto && params.mesh && !lo.start && !singularNetwork &&
+          trialFacesFor(trialSizing) > kQuickTrialFaces) {
+        quick = quickSystems(*t.surface, lo, trialSizing, cancel);
+        if (quick > 1 && principalAuto)
+          if (const std::optional<Sections> sections = sectionsInQuestion()) {
+            LayingOptions so = lo;
+            so.field = sections->field;
+            if (quickSystems(*t.surface, so, trialSizing, cancel) == 1) quick = 0;
+          }
+      }
+      if (!lo.start && !singularNetwork && quick <= 1) {
         try {
           choice = chooseStart(*t.surface, lo, trialSizing, params.cell > 0, cancel);
         } catch (const Error& e) {
@@ -1430,15 +1489,10 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
         lo.start = choice.start;
         lo.base = choice.base;
       }
-      if (!singularNetwork && given.method == TriangulationMethod::Auto && given.field == "principal" && !params.direction &&
-          choice.systems > 1 && params.field == "principal") {
-        const std::optional<Vec3> umbilic = umbilicWithinCurvedPart(*t.surface);
-        // Of the sections along the plan's longest extent and across it, those bending more nearly one way.
-        const double along = umbilic ? sectionBendingMixed(*t.surface, 0) : 1.0;
-        const double across = umbilic && along > 0 ? sectionBendingMixed(*t.surface, 90) : 1.0;
-        if (std::min(along, across) < kSectionMixed) {
+      if (!singularNetwork && principalAuto && choice.systems > 1) {
+        if (const std::optional<Sections> sections = sectionsInQuestion()) {
           LayingOptions so = lo;
-          so.field = across < along ? "section:90" : "section";
+          so.field = sections->field;
           so.start = params.start;
           so.base = BaseFamily::Auto;
           StartChoice section = chooseStart(*t.surface, so, trialSizing, params.cell > 0, cancel);
@@ -1446,7 +1500,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
             std::ostringstream s;
             s << "rows along plane sections (field " << so.field << ") and their conjugate lines, not the curvature lines: "
                  "these turn around an umbilic (k1 = k2) near ("
-              << umbilic->x() << ", " << umbilic->y() << ", " << umbilic->z() << ") and took " << choice.systems
+              << sections->umbilic.x() << ", " << sections->umbilic.y() << ", " << sections->umbilic.z() << ") and took " << choice.systems
               << " systems of rows in the trial lays, the sections " << section.systems
               << "; scores with irregular vertices counted " << section.quality << " against " << choice.quality;
             section.note = section.note.empty() ? s.str() : section.note + "; " + s.str();
@@ -1464,7 +1518,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       // 1500 faces it laid 5-13 points more hexagons, fewer nodes of four beams and no seams; where one system of
       // rows covers the upload (a wave roof, a cylinder, a plane, an ellipsoid) Method 2 stays: 100 % hexagons.
       const bool global = given.method == TriangulationMethod::Auto && params.mesh &&
-                          (singularNetwork || unlaid || choice.systems > 1 || choice.quality < kPoorTrial);
+                          (singularNetwork || quick > 1 || unlaid || choice.systems > 1 || choice.quality < kPoorTrial);
       auto layGlobal = [&](const std::string& why) {
         params.method = t.method = TriangulationMethod::Global;
         t.field.clear();
@@ -1478,6 +1532,10 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
           s << "the upload is closed with Euler characteristic " << euler << " (genus " << (2 - euler) / 2
             << "), so every conjugate network on it has singular points (§7): it was tiled by the global method, with "
                "singular vertices instead of seams";
+        else if (quick > 1)
+          s << "a trial lay at about " << kQuickTrialFaces << " faces took " << quick
+            << " systems of rows (no singularity-free conjugate network covers the upload, §7), so it was tiled by the "
+               "global method, with singular vertices instead of seams";
         else if (unlaid)
           s << "no family of rows could be laid on the upload (§5.2), so it was tiled by the global method";
         else

@@ -1334,6 +1334,33 @@ TEST_CASE("pipeline: an uploaded cylinder or cone is a developable too, planar a
   }
 }
 
+// Under auto an upload is laid by Method 2 where one system of its rows covers it, and globally where its trial
+// lays take several; one quick lay (about 250 faces) first, and where that takes several systems of rows too
+// (the bumps' umbilics: every principal network needs several), the trial lays are skipped. The result is the
+// global method's, bit for bit; an upload of the wave roof, which one system covers, runs the trials and keeps
+// Method 2.
+TEST_CASE("pipeline: under auto, an upload whose quick trial lay takes several systems of rows goes global without the trials") {
+  PipelineParams p;
+  p.mesh = sampledUpload("freeform", 20000);
+  p.faces = 2000;
+  const TriangulationStage quick = triangulate(p);
+  const std::string notes = allNotes(quick.triangulation);
+  INFO(notes);
+  CHECK(quick.method == TriangulationMethod::Global);
+  CHECK(notes.find("a trial lay at about 250 faces took") != std::string::npos);
+  CHECK(notes.find("start chosen among") == std::string::npos);
+  p.method = TriangulationMethod::Global;
+  const TriangulationStage global = triangulate(p);
+  CHECK(quick.triangulation.mesh.V == global.triangulation.mesh.V);
+  CHECK(quick.triangulation.mesh.F == global.triangulation.mesh.F);
+  p.method = TriangulationMethod::Auto;
+  p.mesh = sampledUpload("wave-roof", 20000);
+  const TriangulationStage rows = triangulate(p);
+  INFO(allNotes(rows.triangulation));
+  CHECK(rows.method == TriangulationMethod::Prespecified);
+  CHECK(allNotes(rows.triangulation).find("a trial lay at about") == std::string::npos);
+}
+
 // Under auto an upload that one system of rows covers is laid by Method 2, but where its rows stop short and
 // leave part of the upload bare (the sampled ellipsoid band: a hole over three triangle edges wide), the global
 // method tiles it instead and covers it; an upload whose rows end about an edge short of its boundary (the
