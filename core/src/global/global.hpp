@@ -124,6 +124,21 @@ void sweepLevel(const Level& L, int sweeps, const Update& update) {
       });
     }
 }
+// As sweepLevel, the vertices of a colour taken two at a time: update2(a, b), and update(v) for one left over. Two
+// vertices of a colour are not neighbours, so their updates may run interleaved, each the same as alone: the
+// processor then overlaps their chains of dependent arithmetic, which one vertex's update leaves it waiting on.
+template <typename Update2, typename Update>
+void sweepLevelInPairs(const Level& L, int sweeps, const Update2& update2, const Update& update) {
+  for (int s = 0; s < sweeps; ++s)
+    for (int c = 0; c + 1 < static_cast<int>(L.colorStart.size()); ++c) {
+      const int begin = L.colorStart[c], end = L.colorStart[c + 1];
+      parallelRanges(end - begin, kSweepGrain, [&](int b, int e) {
+        int k = begin + b;
+        for (; k + 1 < begin + e; k += 2) update2(L.colorOrder[k], L.colorOrder[k + 1]);
+        if (k < begin + e) update(L.colorOrder[k]);
+      });
+    }
+}
 // Sets the cell's factor on level 0 and, area-weighted, on the coarser levels.
 void setScale(std::vector<Level>& levels, const std::vector<double>& scale);
 
