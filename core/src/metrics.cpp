@@ -435,9 +435,17 @@ double largestGapToMesh(const PolyMesh& mesh, const std::vector<Vec3>& points, i
       const Eigen::Vector3i c = cellOf(p);
       double best = std::numeric_limits<double>::infinity();
       const int most = dims.maxCoeff();
+      // How far p lies inside its cell (from its nearest wall): a triangle not yet seen after the shells up to r - 1
+      // lies outside their block of cells, at least (r - 1) h + wall from p. Most points lie nearer to a triangle of
+      // their own cell than that and need no shell around it: the same gap as searching the shells up to r - 1 + 1
+      // (the bench's upload at 10k faces: the measures 42-45 -> 17-25 ms on two threads).
+      const Vec3 low = box.min() + h * c.cast<double>();
+      double wall = 0.5 * h;
+      for (int a = 0; a < 3; ++a) wall = std::min({wall, p(a) - low(a), low(a) + h - p(a)});
+      wall = std::max(wall, 0.0);
       for (int r = 0; r <= most; ++r) {
-        // Every triangle within r - 1 cells of p's cell has been seen: stop once the best is nearer than that.
-        if (std::sqrt(best) <= (r - 1) * h) break;
+        // Every triangle within r - 1 cells of p's cell has been seen: stop once the best is nearer than the rest.
+        if (r > 0 && std::sqrt(best) <= (r - 1) * h + wall) break;
         for (int z = c.z() - r; z <= c.z() + r; ++z)
           for (int y = c.y() - r; y <= c.y() + r; ++y)
             for (int x = c.x() - r; x <= c.x() + r; ++x) {
