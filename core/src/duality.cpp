@@ -279,12 +279,20 @@ int untangleDual(DualMesh& dual, const TriMesh& T, const std::vector<LocalGeomet
     return n;
   };
   // Which faces cross themselves as a sweep starts, over threads; in the sweep a face with a corner moved since is
-  // measured again (so the sweep sees what measuring every face in turn would see).
+  // measured again (so the sweep sees what measuring every face in turn would see). Between sweeps only the faces
+  // with a corner the sweep moved are measured again: the others are as the sweep before found them.
   std::vector<char> touched(nvd, 0);
+  std::vector<char> crossed = selfIntersectingFaces(M);
   int moved = 0;
   for (int sweep = 0; sweep < 4; ++sweep) {
     int changed = 0;
-    const std::vector<char> crossed = selfIntersectingFaces(M);
+    if (sweep > 0)
+      for (int f = 0; f < nfd; ++f)
+        for (int k = 0; k < M.faceSize(f); ++k)
+          if (touched[M.face(f)[k]]) {
+            crossed[f] = faceSelfIntersects(M, f);
+            break;
+          }
     std::fill(touched.begin(), touched.end(), char(0));
     for (int f = 0; f < nfd; ++f) {
       if (dual.boundaryFace[f]) continue;
