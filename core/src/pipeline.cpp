@@ -510,12 +510,14 @@ int trialFacesFor(int faces) { return std::clamp(faces / 2, 50, 1000); }
 // of up to 1000 faces, some at full size) only found that out. So where they would be larger, one lay from the
 // middle of the bounds at about this many faces comes first (quickSystems); where it takes several systems of
 // rows, and so does one along plane sections where these are in question (kSectionMixed), the global method
-// tiles the upload without the trials. The same method and mesh on 16 uploads of the analytic surfaces and the
-// six shared models at 1000, 3000 and 10000 faces (48 of them by Method 2's trials), and the trials left out on
-// 13 of the 24 tiled globally: the bubble at 1000, 3000 and 10000 faces 0.90 -> 0.30, 1.93 -> 0.68, 4.37 -> 2.68 s,
-// six_s0 1.52 -> 0.52 s at 3000, the Concerthall 1.43 -> 1.00, the uploaded bumps at 10k faces 1.57 -> 1.37 s;
-// the Method 2 uploads pay the quick lay (a few hundredths of a second at 10k faces). Not the intersection shell,
-// whose quick lay takes one system (its trials two).
+// tiles the upload without the trials; and where the curvature lines' trials take several systems, the plane
+// sections' trials run only where one quick lay along them takes one. The same method and mesh on 16 uploads of
+// the analytic surfaces, the six shared models and the bumps upload at 1000, 3000 and 10000 faces (69 runs, 35 of
+// them kept by Method 2), the trials left out on 15 of the 34 tiled globally: the bubble at 1000, 3000 and 10000
+// faces 0.90 -> 0.30, 1.93 -> 0.68, 4.37 -> 2.68 s, six_s0 1.52 -> 0.52 s at 3000, the Concerthall 1.43 -> 1.00,
+// the bumps upload at 10k faces 1.57 -> 1.37 s; the sections' trials on the intersection shell (its quick lay
+// along them cannot be laid) 3.24 -> 1.90 s at 3000. The uploads kept by Method 2 pay the quick lay (a few
+// hundredths of a second at 10k faces).
 constexpr int kQuickTrialFaces = 250;
 
 // The systems of rows one lay takes from the middle of the bounds at about kQuickTrialFaces where `faces` are
@@ -1469,6 +1471,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       };
       // An upload under auto: one quick lay first (kQuickTrialFaces), where the trials would be larger.
       int quick = 0;
+      int sectionSystems = -1;  // the systems of rows of a quick lay along plane sections (0: none laid; -1: none tried)
       if (given.method == TriangulationMethod::Auto && params.mesh && !lo.start && !singularNetwork &&
           trialFacesFor(trialSizing) > kQuickTrialFaces) {
         quick = quickSystems(*t.surface, lo, trialSizing, cancel);
@@ -1495,8 +1498,15 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
           so.field = sections->field;
           so.start = params.start;
           so.base = BaseFamily::Auto;
-          StartChoice section = chooseStart(*t.surface, so, trialSizing, params.cell > 0, cancel);
-          if (section.quality > choice.quality) {
+          // On an upload the sections matter only where their rows take one system (several send it global
+          // whichever field scores higher, below): where one quick lay along them takes several or cannot be
+          // laid, as in the quick choice above, their trials are left out.
+          if (params.mesh && trialFacesFor(trialSizing) > kQuickTrialFaces)
+            sectionSystems = quickSystems(*t.surface, so, trialSizing, cancel);
+          const bool several = sectionSystems >= 0 && sectionSystems != 1;
+          StartChoice section;
+          if (!several) section = chooseStart(*t.surface, so, trialSizing, params.cell > 0, cancel);
+          if (!several && section.quality > choice.quality) {
             std::ostringstream s;
             s << "rows along plane sections (field " << so.field << ") and their conjugate lines, not the curvature lines: "
                  "these turn around an umbilic (k1 = k2) near ("
@@ -1539,8 +1549,14 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
         else if (unlaid)
           s << "no family of rows could be laid on the upload (§5.2), so it was tiled by the global method";
         else
-          s << "the trial lays took " << choice.systems << " systems of rows (no singularity-free conjugate network covers the "
-               "upload, §7), so it was tiled by the global method, with singular vertices instead of seams";
+          s << (choice.systems > 1 ? "the trial lays took " + std::to_string(choice.systems) +
+                                         " systems of rows (no singularity-free conjugate network covers the upload, §7)"
+                                   : "the trial lays scored poorly (they covered too little of the upload or left too "
+                                     "many stars invalid)")
+            << (sectionSystems == 0   ? " and a lay along plane sections could not be laid"
+                : sectionSystems > 1 ? " and a lay along plane sections " + std::to_string(sectionSystems)
+                                     : std::string())
+            << ", so it was tiled by the global method, with singular vertices instead of seams";
         layGlobal(s.str());
       } else {
       const std::string& startNote = choice.note;

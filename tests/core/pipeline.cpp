@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <fstream>
+#include <iterator>
 #include <optional>
 #include <sstream>
 
@@ -1359,6 +1361,26 @@ TEST_CASE("pipeline: under auto, an upload whose quick trial lay takes several s
   INFO(allNotes(rows.triangulation));
   CHECK(rows.method == TriangulationMethod::Prespecified);
   CHECK(allNotes(rows.triangulation).find("a trial lay at about") == std::string::npos);
+}
+
+// Where the curvature lines' trial lays take several systems of rows and plane sections are in question (an
+// umbilic, sections bending mostly one way), the sections' trials run only where one quick lay along them takes
+// one system: on PH-CPF's intersection shell it cannot be laid, and the shell is tiled globally at once.
+TEST_CASE("pipeline: under auto, plane sections whose quick lay cannot cover an upload are not tried at full size") {
+  std::ifstream in(PHEX_TEST_DATA "/phcpf_intersection.off", std::ios::binary);
+  PipelineParams p;
+  p.mesh = MeshInput{std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {}), "off", "phcpf_intersection.off"};
+  p.faces = 2000;
+  const TriangulationStage laid = triangulate(p);
+  const std::string notes = allNotes(laid.triangulation);
+  INFO(notes);
+  CHECK(laid.method == TriangulationMethod::Global);
+  CHECK(notes.find("the trial lays took 2 systems of rows") != std::string::npos);
+  CHECK(notes.find("a lay along plane sections could not be laid") != std::string::npos);
+  p.method = TriangulationMethod::Global;
+  const TriangulationStage global = triangulate(p);
+  CHECK(laid.triangulation.mesh.V == global.triangulation.mesh.V);
+  CHECK(laid.triangulation.mesh.F == global.triangulation.mesh.F);
 }
 
 // Under auto an upload that one system of rows covers is laid by Method 2, but where its rows stop short and
