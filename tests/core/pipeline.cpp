@@ -1341,21 +1341,24 @@ TEST_CASE("pipeline: an uploaded cylinder or cone is a developable too, planar a
 // (the bumps' umbilics: every principal network needs several), the trial lays are skipped. The result is the
 // global method's, bit for bit; an upload of the wave roof, which one system covers, runs the trials and keeps
 // Method 2.
+// An upload laid under auto (`laid`, from `p`) tiled by the global method, as `--method global` tiles it; its notes.
+std::string checkLaidGlobally(PipelineParams p, const TriangulationStage& laid) {
+  CHECK(laid.method == TriangulationMethod::Global);
+  p.method = TriangulationMethod::Global;
+  const TriangulationStage global = triangulate(p);
+  CHECK(laid.triangulation.mesh.V == global.triangulation.mesh.V);
+  CHECK(laid.triangulation.mesh.F == global.triangulation.mesh.F);
+  return allNotes(laid.triangulation);
+}
+
 TEST_CASE("pipeline: under auto, an upload whose quick trial lay takes several systems of rows goes global without the trials") {
   PipelineParams p;
   p.mesh = sampledUpload("freeform", 20000);
   p.faces = 2000;
-  const TriangulationStage quick = triangulate(p);
-  const std::string notes = allNotes(quick.triangulation);
+  const std::string notes = checkLaidGlobally(p, triangulate(p));
   INFO(notes);
-  CHECK(quick.method == TriangulationMethod::Global);
   CHECK(notes.find("a trial lay at about 250 faces took") != std::string::npos);
   CHECK(notes.find("start chosen among") == std::string::npos);
-  p.method = TriangulationMethod::Global;
-  const TriangulationStage global = triangulate(p);
-  CHECK(quick.triangulation.mesh.V == global.triangulation.mesh.V);
-  CHECK(quick.triangulation.mesh.F == global.triangulation.mesh.F);
-  p.method = TriangulationMethod::Auto;
   p.mesh = sampledUpload("wave-roof", 20000);
   const TriangulationStage rows = triangulate(p);
   INFO(allNotes(rows.triangulation));
@@ -1371,16 +1374,10 @@ TEST_CASE("pipeline: under auto, plane sections whose quick lay cannot cover an 
   PipelineParams p;
   p.mesh = MeshInput{std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {}), "off", "phcpf_intersection.off"};
   p.faces = 2000;
-  const TriangulationStage laid = triangulate(p);
-  const std::string notes = allNotes(laid.triangulation);
+  const std::string notes = checkLaidGlobally(p, triangulate(p));
   INFO(notes);
-  CHECK(laid.method == TriangulationMethod::Global);
   CHECK(notes.find("the trial lays took 2 systems of rows") != std::string::npos);
   CHECK(notes.find("a lay along plane sections could not be laid") != std::string::npos);
-  p.method = TriangulationMethod::Global;
-  const TriangulationStage global = triangulate(p);
-  CHECK(laid.triangulation.mesh.V == global.triangulation.mesh.V);
-  CHECK(laid.triangulation.mesh.F == global.triangulation.mesh.F);
 }
 
 // Under auto an upload that one system of rows covers is laid by Method 2, but where its rows stop short and
