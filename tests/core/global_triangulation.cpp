@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -360,7 +361,7 @@ TEST_CASE("global field: the integrable scale solved iteratively equals the fact
   const global::FieldMesh m = global::fieldMesh(*torus, 0.04, 1.5, 0.25, nullptr);
   std::vector<global::Level> levels = global::hierarchy(m, std::vector<double>(m.vertexCount(), 1.0));
   const std::vector<std::vector<Vec3>> fields = global::orientationField(levels, 1.0, {}, nullptr);
-  const std::vector<double> direct = global::integrableScale(m, fields[0], 1.0);
+  const std::vector<double> direct = global::integrableScale(m, fields[0], 1.0, std::numeric_limits<int>::max());
   const std::vector<double> iterative = global::integrableScale(m, fields[0], 1.0, 0);
   REQUIRE(direct.size() == iterative.size());
   double lo = direct[0], hi = direct[0], apart = 0;

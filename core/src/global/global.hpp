@@ -157,8 +157,12 @@ int singularityIndex(const FieldMesh& mesh, const std::vector<Vec3>& q, int i, i
 // it can be (scale.cpp): e^phi with grad phi = -J omega in least squares, omega the field's turn against parallel
 // transport, `strength` in [0, 1] scaling omega (0: uniform cells). Normalized to the uniform cell's mean area.
 // Up to `directLimit` vertices of the mesh it is solved on (the coarse mesh the field mesh refines) its normal
-// equations are factorized; above, solved by conjugate gradients, preconditioned on aggregates of vertices.
-constexpr int kDirectScale = 50000;
+// equations are factorized; above, solved by conjugate gradients, preconditioned on aggregates of vertices. The
+// factorization's fill grows faster than the iterations' work: at 3000 faces on uploads of the bumps of 10k, 15k,
+// 20k, 30k and 40k vertices 58 / 113 / 177 / 318 / 466 ms factorized against 54 / 97 / 137 / 211 / 281 iterated, the
+// generated genus 2 (49k) 1.09 s against 0.50 s (laid twice at 1000 faces). Below 12000 (every run of the sweeps, the
+// bench's upload at 10k faces, the shared models) the factorized solve stands, as before.
+constexpr int kDirectScale = 12000;
 std::vector<double> integrableScale(const FieldMesh& mesh, const std::vector<Vec3>& q, double strength,
                                     int directLimit = kDirectScale);
 
