@@ -1457,30 +1457,43 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       const bool principalAuto = given.method == TriangulationMethod::Auto && given.field == "principal" &&
                                  !params.direction && params.field == "principal";
       // Of the sections along the plan's longest extent and across it, the field of those bending more nearly one
-      // way where the upload has an umbilic in its curved part (below); else nothing.
+      // way where the upload has an umbilic in its curved part (below); else nothing. Judged once (some 400 samples
+      // each), when first asked.
       struct Sections {
         std::string field;
         Vec3 umbilic;
       };
-      auto sectionsInQuestion = [&]() -> std::optional<Sections> {
-        const std::optional<Vec3> umbilic = umbilicWithinCurvedPart(*t.surface);
-        const double along = umbilic ? sectionBendingMixed(*t.surface, 0) : 1.0;
-        const double across = umbilic && along > 0 ? sectionBendingMixed(*t.surface, 90) : 1.0;
-        if (!(std::min(along, across) < kSectionMixed)) return std::nullopt;
-        return Sections{across < along ? "section:90" : "section", *umbilic};
+      std::optional<std::optional<Sections>> sectionsJudged;
+      auto sectionsInQuestion = [&]() -> const std::optional<Sections>& {
+        if (!sectionsJudged) {
+          const std::optional<Vec3> umbilic = umbilicWithinCurvedPart(*t.surface);
+          const double along = umbilic ? sectionBendingMixed(*t.surface, 0) : 1.0;
+          const double across = umbilic && along > 0 ? sectionBendingMixed(*t.surface, 90) : 1.0;
+          sectionsJudged.emplace();
+          if (std::min(along, across) < kSectionMixed)
+            *sectionsJudged = Sections{across < along ? "section:90" : "section", *umbilic};
+        }
+        return *sectionsJudged;
       };
       // An upload under auto: one quick lay first (kQuickTrialFaces), where the trials would be larger.
+      const bool quickFirst = given.method == TriangulationMethod::Auto && params.mesh && !lo.start && !singularNetwork &&
+                              trialFacesFor(trialSizing) > kQuickTrialFaces;
       int quick = 0;
       int sectionSystems = -1;  // the systems of rows of a quick lay along plane sections (0: none laid; -1: none tried)
-      if (given.method == TriangulationMethod::Auto && params.mesh && !lo.start && !singularNetwork &&
-          trialFacesFor(trialSizing) > kQuickTrialFaces) {
+      auto quickSections = [&](const Sections& sections) {  // laid once, from the middle of the bounds as any quick lay
+        if (sectionSystems < 0) {
+          LayingOptions so = lo;
+          so.field = sections.field;
+          so.base = BaseFamily::Auto;
+          sectionSystems = quickSystems(*t.surface, so, trialSizing, cancel);
+        }
+        return sectionSystems;
+      };
+      if (quickFirst) {
         quick = quickSystems(*t.surface, lo, trialSizing, cancel);
         if (quick > 1 && principalAuto)
-          if (const std::optional<Sections> sections = sectionsInQuestion()) {
-            LayingOptions so = lo;
-            so.field = sections->field;
-            if (quickSystems(*t.surface, so, trialSizing, cancel) == 1) quick = 0;
-          }
+          if (const std::optional<Sections>& sections = sectionsInQuestion())
+            if (quickSections(*sections) == 1) quick = 0;
       }
       if (!lo.start && !singularNetwork && quick <= 1) {
         try {
@@ -1493,7 +1506,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
         lo.base = choice.base;
       }
       if (!singularNetwork && principalAuto && choice.systems > 1) {
-        if (const std::optional<Sections> sections = sectionsInQuestion()) {
+        if (const std::optional<Sections>& sections = sectionsInQuestion()) {
           LayingOptions so = lo;
           so.field = sections->field;
           so.start = params.start;
@@ -1501,9 +1514,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
           // On an upload the sections matter only where their rows take one system (several send it global
           // whichever field scores higher, below): where one quick lay along them takes several or cannot be
           // laid, as in the quick choice above, their trials are left out.
-          if (params.mesh && trialFacesFor(trialSizing) > kQuickTrialFaces)
-            sectionSystems = quickSystems(*t.surface, so, trialSizing, cancel);
-          const bool several = sectionSystems >= 0 && sectionSystems != 1;
+          const bool several = quickFirst && quickSections(*sections) != 1;
           StartChoice section;
           if (!several) section = chooseStart(*t.surface, so, trialSizing, params.cell > 0, cancel);
           if (!several && section.quality > choice.quality) {

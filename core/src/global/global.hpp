@@ -112,20 +112,9 @@ std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& s
 // Vertices per thread in the sweeps (each costs about a microsecond).
 constexpr int kSweepGrain = 1024;
 
-// `sweeps` Gauss-Seidel sweeps over level L: update(v) for every vertex, one colour after another, the vertices
-// of a colour over threads (no two are neighbours, so the result does not depend on the thread count).
-template <typename Update>
-void sweepLevel(const Level& L, int sweeps, const Update& update) {
-  for (int s = 0; s < sweeps; ++s)
-    for (int c = 0; c + 1 < static_cast<int>(L.colorStart.size()); ++c) {
-      const int begin = L.colorStart[c], end = L.colorStart[c + 1];
-      parallelRanges(end - begin, kSweepGrain, [&](int b, int e) {
-        for (int k = begin + b; k < begin + e; ++k) update(L.colorOrder[k]);
-      });
-    }
-}
-// As sweepLevel, the vertices of a colour taken two at a time: update2(a, b), and update(v) for one left over. Two
-// vertices of a colour are not neighbours, so their updates may run interleaved, each the same as alone: the
+// `sweeps` Gauss-Seidel sweeps over level L, one colour after another, the vertices of a colour over threads (no two
+// are neighbours, so the result does not depend on the thread count), two at a time: update2(a, b), and update(v)
+// for one left over. Being no neighbours, two vertices' updates may run interleaved, each the same as alone: the
 // processor then overlaps their chains of dependent arithmetic, which one vertex's update leaves it waiting on.
 template <typename Update2, typename Update>
 void sweepLevelInPairs(const Level& L, int sweeps, const Update2& update2, const Update& update) {
@@ -138,6 +127,11 @@ void sweepLevelInPairs(const Level& L, int sweeps, const Update2& update2, const
         if (k < begin + e) update(L.colorOrder[k]);
       });
     }
+}
+// The same with update(v) for every vertex in turn.
+template <typename Update>
+void sweepLevel(const Level& L, int sweeps, const Update& update) {
+  sweepLevelInPairs(L, sweeps, [&](int a, int b) { update(a), update(b); }, update);
 }
 // Sets the cell's factor on level 0 and, area-weighted, on the coarser levels.
 void setScale(std::vector<Level>& levels, const std::vector<double>& scale);

@@ -77,13 +77,19 @@ Vec3 middlePoint(const Vec3& p0, const Vec3& n0, const Vec3& p1, const Vec3& n1)
 // enough so (most neighbours on the fine levels).
 inline bool flatHinge(double c) { return c > kFlatHinge || c < -0.5; }
 
+// The point of vertex u's lattice (through o) nearest to p, moved into v's tangent plane (at xv, normal nv): as the
+// two planes compare where flat (flatHinge).
+[[gnu::always_inline]] inline Vec3 nearestFlat(const Lattice& lat, const Vec3& o, const Vec3& p, const Vec3& xv, const Vec3& nv) {
+  return intoPlane(nearestPoint(lat, o, p), xv, nv);
+}
+
 // The point of vertex u's lattice nearest to p (a point of vertex v's tangent plane), the two planes hinged on their
 // line of intersection (the surface between them unbent), so that lattice points compare as on the surface and not
 // across its bend; the result is in v's plane.
 [[gnu::always_inline]] inline Vec3 nearestHinged(const Lattice& lat, const Vec3& o, const Vec3& xu, const Vec3& nu, const Vec3& p, const Vec3& xv,
                    const Vec3& nv) {
   const double c = dot(nu, nv);
-  if (flatHinge(c)) return intoPlane(nearestPoint(lat, o, p), xv, nv);
+  if (flatHinge(c)) return nearestFlat(lat, o, p, xv, nv);
   const Vec3 hinge = middlePoint(xv, nv, xu, nu);
   const Vec3 axis = cross(nv, nu);  // v's plane onto u's, and back about -axis
   const Vec3 inU = hinge + rotateInto(p - hinge, axis, c);
@@ -138,7 +144,7 @@ std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vec
     auto first = [&](int v) { return Mean{v, L.start[v], L.start[v + 1], L.x[v], L.frame[v].n, O[v], 0.0}; };
     auto step = [&](Mean& m) {
       const int i = m.i++, u = L.adjacent[i];
-      const Vec3 p = flat[i] ? intoPlane(nearestPoint(lattice[u], O[u], m.sum), m.x, m.n)
+      const Vec3 p = flat[i] ? nearestFlat(lattice[u], O[u], m.sum, m.x, m.n)
                              : nearestHinged(lattice[u], O[u], L.x[u], L.frame[u].n, m.sum, m.x, m.n);
       m.sum = (m.sum * m.weight + p) / (m.weight + 1);
       m.weight += 1;
