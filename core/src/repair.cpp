@@ -496,8 +496,9 @@ int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo, 
     return !incident[v].empty();
   };
   auto judge = [&](int v, bool first) {
-    if (!judgeable[v] || !closed(v)) return 0;
-    if (first && known && (*known)[v] >= 0) return (*known)[v];
+    // (A star the repair found valid counts 0 whether its fan closes or not: not looked at again.)
+    if (!judgeable[v] || (first && known && (*known)[v] == 0) || !closed(v)) return 0;
+    if (first && known && (*known)[v] > 0) return (*known)[v];
     const LocalGeometry& g = geo[v];
     int bad = 0;
     for (int f : incident[v]) {
@@ -574,9 +575,9 @@ int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo, 
               continue;
             if (!upright(x, q, p) || !upright(q, y, p)) continue;
             const int corners[4] = {x, y, p, q};
-            int starsBefore = 0, trianglesBefore = 0;
-            for (int c : corners) {
-              const int n = failing(c);
+            int starsBefore = 0, trianglesBefore = 0, before[4];
+            for (int i = 0; i < 4; ++i) {
+              const int n = before[i] = failing(corners[i]);
               starsBefore += n > 0, trianglesBefore += n;
             }
             if (starsBefore == 0) continue;
@@ -604,6 +605,9 @@ int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo, 
             T.F.row(f2) = old2.transpose();
             attach(f1);
             attach(f2);
+            // The four stars as before the flip (only the order of their triangles in `incident` changed, which
+            // a judgement does not depend on): their counts as judged then, not judged again.
+            for (int i = 0; i < 4; ++i) judged[corners[i]] = before[i];
           }
           if (again) break;
         }
