@@ -181,11 +181,9 @@ const LocalGeometry* GeometryCache::find(const Vec3& p) const {
   return it == table_.end() ? nullptr : &it->second;
 }
 
-void GeometryCache::keep(const Points& V, const std::vector<LocalGeometry>& geometry) {
-  table_.clear();
-  table_.reserve(geometry.size());
+void GeometryCache::keep(const Points& V, const std::vector<LocalGeometry>& geometry, const std::vector<char>& found) {
   for (std::size_t v = 0; v < geometry.size(); ++v)
-    table_.emplace(ExactPoint{V(Eigen::Index(v), 0), V(Eigen::Index(v), 1), V(Eigen::Index(v), 2)}, geometry[v]);
+    if (!found[v]) table_.emplace(ExactPoint{V(Eigen::Index(v), 0), V(Eigen::Index(v), 1), V(Eigen::Index(v), 2)}, geometry[v]);
 }
 
 std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface& surface, GeometryCache* cache) {
@@ -204,7 +202,7 @@ std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface&
       geo[v] = exact ? parametric->geometryAt(t.uv[v].x(), t.uv[v].y()) : surface.closestPoint(t.mesh.V.row(v).transpose());
     }
   });
-  if (cache) cache->keep(t.mesh.V, geo);
+  if (cache) cache->keep(t.mesh.V, geo, found);
   return geo;
 }
 

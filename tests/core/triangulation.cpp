@@ -169,12 +169,14 @@ TEST_CASE("triangulation: a geometry cache looks up only the vertices that moved
   for (int v = 0; v < nv; ++v) REQUIRE(sameGeometry(second[v], fresh[v]));
   CHECK(sameGeometry(second[1], first[1]));
   CHECK_FALSE(sameGeometry(second[7], first[7]));
-  // The cache keeps the last call's vertices alone: a vertex put back where it was is looked up again.
+  // The cache keeps every point looked up so far: a vertex put back where it was is not looked up again, and its
+  // geometry is the look-up's (closestPoint is a function of the point).
   t.mesh.V.row(7) = laid.row(7);
   s.lookups = 0;
   const std::vector<LocalGeometry> third = vertexGeometry(t, s, &cache);
-  CHECK(s.lookups == 1);
+  CHECK(s.lookups == 0);
   CHECK(sameGeometry(third[7], first[7]));
+  CHECK(sameGeometry(third[7], torus->closestPoint(laid.row(7).transpose())));
   // The Dupin dual through the cache is the dual without it.
   const DualMesh cached = dupinDual(t, s, true, &cache), plain = dupinDual(t, s);
   CHECK(cached.mesh.V == plain.mesh.V);

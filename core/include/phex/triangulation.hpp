@@ -31,15 +31,18 @@ struct Triangulation {
   std::vector<FieldSingularity> singularities;
 };
 
-// The surface's closest points (closestPoint) at the vertices of a triangulation as vertexGeometry last found
-// them, by the vertices' exact coordinates: rounds that change a triangulation here and there (the pipeline's
-// rounds against folds) look up only the vertices that moved. Each call of vertexGeometry with it keeps the
-// geometry of that call's vertices alone. One cache serves one surface.
+// The surface's closest points (closestPoint) at the vertices of triangulations as vertexGeometry found them, by
+// the vertices' exact coordinates: rounds that change a triangulation here and there (the pipeline's rounds
+// against folds) look up only the vertices that moved. Each call of vertexGeometry with it adds the points it
+// had to look up (closestPoint is a function of the point: an entry kept from an earlier call is the one a look-up
+// would give; emptied and filled again each call, the table cost 47 ms a call at 100k faces). One cache serves
+// one surface.
 class GeometryCache {
  public:
-  // The geometry at p, or null where p was not among the vertices of the last call.
+  // The geometry at p, or null where p was not a vertex in any call so far.
   const LocalGeometry* find(const Vec3& p) const;
-  void keep(const Points& V, const std::vector<LocalGeometry>& geometry);
+  // Adds the vertices of V not found before (found[v] == 0) with their geometry.
+  void keep(const Points& V, const std::vector<LocalGeometry>& geometry, const std::vector<char>& found);
 
  private:
   std::unordered_map<ExactPoint, LocalGeometry, ExactPointHasher> table_;
