@@ -191,6 +191,16 @@ class Repair {
     std::vector<int> start(nv + 1, 0);
     for (int v = 0; v < nv; ++v)
       start[v + 1] = start[v] + (checkable[v] ? static_cast<int>(rings_.triangles[v].size()) : 0);
+    if (!same.empty() && checkable == checkable_ && start == cacheStart_) {  // the same layout: in place
+      parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
+        for (int v = begin; v < end; ++v)
+          if (checkable_[v] && !same[v])
+            for (std::size_t i = 0; i < rings_.triangles[v].size(); ++i)
+              cache_[cacheStart_[v] + i] = starTriangle(v, rings_.triangles[v][i]);
+      });
+      judgedF_ = T_.F;
+      return;
+    }
     std::vector<TriangleState> cache(start[nv]);
     parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {  // each entry on its own
       for (int v = begin; v < end; ++v) {

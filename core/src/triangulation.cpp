@@ -208,15 +208,20 @@ std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface&
 
 std::vector<char> judgedStars(const TriMesh& T, const VertexRings& rings, const std::vector<LocalGeometry>& geo,
                               double edgeMean) {
-  std::vector<char> judged(T.V.rows(), 0);
-  for (int v = 0; v < static_cast<int>(T.V.rows()); ++v) {
+  const int nv = static_cast<int>(T.V.rows());
+  std::vector<char> judged(nv, 0);
+  // Each vertex's kind once (a star reads its corners' kinds: on a mesh of 100k vertices, classifying them star
+  // by star read the geometry of 1.8M corners from all over memory).
+  std::vector<PointType> kind(nv);
+  for (int v = 0; v < nv; ++v) kind[v] = classify(geo[v], 1e-6, edgeMean);
+  for (int v = 0; v < nv; ++v) {
     if (rings.triangles[v].empty() || !rings.closed[v]) continue;
-    const PointType type = classify(geo[v], 1e-6, edgeMean);
+    const PointType type = kind[v];
     // A star across a parabolic curve (a neighbour where K has the other sign or vanishes: §6 step 1) has no
     // single indicatrix to be judged by: the curvature its edges span changes in kind.
     bool across = type == PointType::Parabolic || type == PointType::Planar;
     for (int f : rings.triangles[v])
-      for (int k = 0; k < 3 && !across; ++k) across = classify(geo[T.F(f, k)], 1e-6, edgeMean) != type;
+      for (int k = 0; k < 3 && !across; ++k) across = kind[T.F(f, k)] != type;
     judged[v] = !across;
   }
   return judged;
