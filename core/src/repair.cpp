@@ -134,7 +134,6 @@ class Repair {
     idleAt_.assign(nv, -1);
   }
 
-
   RepairResult run(int maxSweeps) {
     RepairResult r;
     const int nv = static_cast<int>(T_.V.rows());
@@ -472,11 +471,11 @@ class Repair {
 // 5 (or as many, with fewer failing triangles), both new triangles stand upright over the surface with a
 // height of at least kFlipHeight of their longest edge, no vertex drops below valence 4 and none rises
 // above 8. Stars are judged at their own vertex's geometry, parabolic or planar ones not at all (as
-// checkTriangulation). Returns how many edges were flipped.
+// checkTriangulation). Returns how many edges were flipped. `known` (where given) holds each star's failing
+// triangles as the repair judged them (-1 where it did not): such a star is not evaluated again before the first
+// sweep (its count is the same: starIsValid at the same geometry and corners), only whether it is judged here at
+// all.
 constexpr double kFlipHeight = 0.3;
-//   `known` (where given) holds each star's failing triangles as the repair judged them (-1 where it did not): such
-// a star is not evaluated again before the first sweep (its count is the same: starIsValid at the same geometry
-// and corners), only whether it is judged here at all.
 int flipAtInvalidStars(Triangulation& t, const std::vector<LocalGeometry>& geo, const std::vector<int>* known = nullptr) {
   TriMesh& T = t.mesh;
   const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
