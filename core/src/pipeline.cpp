@@ -1514,10 +1514,10 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
           // On an upload the sections matter only where their rows take one system (several send it global
           // whichever field scores higher, below): where one quick lay along them takes several or cannot be
           // laid, as in the quick choice above, their trials are left out.
-          const bool several = quickFirst && quickSections(*sections) != 1;
           StartChoice section;
-          if (!several) section = chooseStart(*t.surface, so, trialSizing, params.cell > 0, cancel);
-          if (!several && section.quality > choice.quality) {
+          if (!(quickFirst && quickSections(*sections) != 1))
+            section = chooseStart(*t.surface, so, trialSizing, params.cell > 0, cancel);
+          if (section.quality > choice.quality) {
             std::ostringstream s;
             s << "rows along plane sections (field " << so.field << ") and their conjugate lines, not the curvature lines: "
                  "these turn around an umbilic (k1 = k2) near ("
@@ -1565,7 +1565,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
                                    : "the trial lays scored poorly (they covered too little of the upload or left too "
                                      "many stars invalid)")
             << (sectionSystems == 0   ? " and a lay along plane sections could not be laid"
-                : sectionSystems > 1 ? " and a lay along plane sections " + std::to_string(sectionSystems)
+                : sectionSystems > 1 ? " and a lay along plane sections took " + std::to_string(sectionSystems) + " systems"
                                      : std::string())
             << ", so it was tiled by the global method, with singular vertices instead of seams";
         layGlobal(s.str());

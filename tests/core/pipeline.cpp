@@ -1336,11 +1336,6 @@ TEST_CASE("pipeline: an uploaded cylinder or cone is a developable too, planar a
   }
 }
 
-// Under auto an upload is laid by Method 2 where one system of its rows covers it, and globally where its trial
-// lays take several; one quick lay (about 250 faces) first, and where that takes several systems of rows too
-// (the bumps' umbilics: every principal network needs several), the trial lays are skipped. The result is the
-// global method's, bit for bit; an upload of the wave roof, which one system covers, runs the trials and keeps
-// Method 2.
 // An upload laid under auto (`laid`, from `p`) tiled by the global method, as `--method global` tiles it; its notes.
 std::string checkLaidGlobally(PipelineParams p, const TriangulationStage& laid) {
   CHECK(laid.method == TriangulationMethod::Global);
@@ -1351,6 +1346,11 @@ std::string checkLaidGlobally(PipelineParams p, const TriangulationStage& laid) 
   return allNotes(laid.triangulation);
 }
 
+// Under auto an upload is laid by Method 2 where one system of its rows covers it, and globally where its trial
+// lays take several; one quick lay (about 250 faces) first, and where that takes several systems of rows too
+// (the bumps' umbilics: every principal network needs several), the trial lays are skipped. The result is the
+// global method's, bit for bit; an upload of the wave roof, which one system covers, runs the trials and keeps
+// Method 2.
 TEST_CASE("pipeline: under auto, an upload whose quick trial lay takes several systems of rows goes global without the trials") {
   PipelineParams p;
   p.mesh = sampledUpload("freeform", 20000);

@@ -167,12 +167,15 @@ std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vec
     parallelRanges(L.size(), kSweepGrain, [&](int begin, int end) {
       for (int v = begin; v < end; ++v) lattice[v] = latticeAt(L, Q, v, cell);
     });
+    // Vertex v's own lattice point nearest to it, its lattice laid through `origin` (on the boundary line where the
+    // direction is fixed): where it starts, and where each sweep leaves it.
+    auto settle = [&](int v, const Vec3& origin) {
+      const Vec3 o = intoPlane(nearestPoint(lattice[v], origin, L.x[v]), L.x[v], L.frame[v].n);
+      return L.fixed[v] ? ontoBoundary(o, L.x[v], L.target[v], lattice[v].U) : o;
+    };
     O.assign(L.size(), Vec3::Zero());
-    for (int v = 0; v < L.size(); ++v) {
-      const Vec3 start = l == count - 1 ? L.x[v] : intoPlane(parentO[L.parent[v]], L.x[v], L.frame[v].n);
-      O[v] = intoPlane(nearestPoint(lattice[v], start, L.x[v]), L.x[v], L.frame[v].n);
-      if (L.fixed[v]) O[v] = ontoBoundary(O[v], L.x[v], L.target[v], lattice[v].U);
-    }
+    for (int v = 0; v < L.size(); ++v)
+      O[v] = settle(v, l == count - 1 ? L.x[v] : intoPlane(parentO[L.parent[v]], L.x[v], L.frame[v].n));
     // Per neighbour entry, whether the two tangent planes compare as they are (nearestHinged's flat case; all of
     // them on the finest level of the bench's upload): fixed while the positions are smoothed, and the neighbour's
     // normal is not read again in every sweep.
@@ -196,10 +199,18 @@ std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vec
       m.sum = (m.sum * m.weight + p) / (m.weight + 1);
       m.weight += 1;
     };
-    auto last = [&](const Mean& m) {
-      Vec3 o = intoPlane(nearestPoint(lattice[m.v], m.sum, m.x), m.x, m.n);
-      if (L.fixed[m.v]) o = ontoBoundary(o, m.x, L.target[m.v], lattice[m.v].U);
-      O[m.v] = o;
+    auto last = [&](const Mean& m) { O[m.v] = settle(m.v, m.sum); };
+    // Both vertices' next steps; natively in SSE2 lanes where both neighbours' planes compare flat.
+    auto stepBoth = [&](Mean& ma, Mean& mb) {
+#if defined(__SSE2__) && defined(__GNUC__)
+      if (flat[ma.i] && flat[mb.i]) {
+        const int ua = L.adjacent[ma.i++], ub = L.adjacent[mb.i++];
+        nearestFlatPairStep(lattice[ua], lattice[ub], O[ua], O[ub], ma.sum, mb.sum, ma.x, mb.x, ma.n, mb.n, ma.weight, mb.weight);
+        ma.weight += 1, mb.weight += 1;
+        return;
+      }
+#endif
+      step(ma), step(mb);
     };
     // Two vertices' steps interleaved (sweepLevelInPairs), and the flat hinges known beforehand: the position
     // field's finest level at 10k faces (the bench's upload) 285-343 -> 237-254 ms on one thread, 151-163 -> 124-138
@@ -208,20 +219,7 @@ std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vec
         L, sweepsAt(l, count),
         [&](int a, int b) {
           Mean ma = first(a), mb = first(b);
-#if defined(__SSE2__) && defined(__GNUC__)
-          while (ma.i < ma.end && mb.i < mb.end) {
-            if (flat[ma.i] && flat[mb.i]) {
-              const int ua = L.adjacent[ma.i++], ub = L.adjacent[mb.i++];
-              nearestFlatPairStep(lattice[ua], lattice[ub], O[ua], O[ub], ma.sum, mb.sum, ma.x, mb.x, ma.n, mb.n, ma.weight,
-                                  mb.weight);
-              ma.weight += 1, mb.weight += 1;
-            } else {
-              step(ma), step(mb);
-            }
-          }
-#else
-          while (ma.i < ma.end && mb.i < mb.end) step(ma), step(mb);
-#endif
+          while (ma.i < ma.end && mb.i < mb.end) stepBoth(ma, mb);
           while (ma.i < ma.end) step(ma);
           while (mb.i < mb.end) step(mb);
           last(ma);
