@@ -188,8 +188,14 @@ Vec3 pointAlong(const std::vector<Vec3>& p, double s) {
 
 }  // namespace
 
-BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
+namespace {
+
+BoundaryClip clipPanels(PolyMesh& mesh, const Surface& surface, bool mayRemove, std::vector<int>* faceOf) {
   BoundaryClip out;
+  if (faceOf) {
+    faceOf->resize(static_cast<std::size_t>(mesh.faceCount()));
+    for (int f = 0; f < mesh.faceCount(); ++f) (*faceOf)[f] = f;
+  }
   const int F = mesh.faceCount(), V = static_cast<int>(mesh.V.rows());
   const double h = mesh.meanEdgeLength();
   if (F == 0 || !(h > 0)) return out;
@@ -316,6 +322,7 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
     // corner's index in `added`), for the runs that start there (fromEnd) and those that end there (toEnd).
     std::vector<std::pair<int, int>> fromEnd, toEnd;
     bool ok = false;
+    bool outside = false;  // the curve runs beyond the panel's other nodes: the whole panel lies outside it
   };
   std::vector<std::vector<ClipEnd>> cache(2, std::vector<ClipEnd>(static_cast<std::size_t>(V)));
   std::vector<std::vector<char>> cached(2, std::vector<char>(static_cast<std::size_t>(V), 0));
@@ -455,7 +462,20 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
     Vec3 u = plane.normal.unitOrthogonal(), v = plane.normal.cross(u);
     std::vector<Vec2> q;
     for (const Vec3& x : position) q.emplace_back((x - plane.centroid).dot(u), (x - plane.centroid).dot(v));
-    if (polygonSelfIntersects(q) || !(signedArea(q) > 0)) return c;
+    const bool crosses = polygonSelfIntersects(q);
+    if (crosses || !(signedArea(q) > 0)) {
+      // A simple outline turned over, where the panel itself is simple and turns the right way: the curve passes
+      // beyond the panel's nodes into the surface, so all of the panel lies outside it.
+      if (!crosses) {
+        std::vector<Vec2> own;
+        for (int i = 0; i < n; ++i) {
+          const Vec3 x = mesh.vertex(ids[i]);
+          own.emplace_back((x - plane.centroid).dot(u), (x - plane.centroid).dot(v));
+        }
+        c.outside = !polygonSelfIntersects(own) && signedArea(own) > 0;
+      }
+      return c;
+    }
     const int m = static_cast<int>(q.size());
     for (int r = 0; r < m; ++r) {
       bool fan = true;
@@ -491,6 +511,40 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
       for (int i = 0; i < n; ++i) {
         const bool before = onBoundary(ids[(i + n - 1) % n], ids[i]), after = onBoundary(ids[i], ids[(i + 1) % n]);
         if (before != after && !fixed[ids[i]]) fixed[ids[i]] = 1, changed = true;
+      }
+    }
+  }
+
+  // Panels wholly outside the curve go, where the mesh stays a manifold without them, and the panels then on the
+  // boundary are clipped afresh (once: what lies outside after that stays as it is).
+  if (mayRemove) {
+    std::vector<char> drop(static_cast<std::size_t>(F), 0);
+    int dropped = 0;
+    for (std::size_t k = 0; k < panels.size(); ++k)
+      if (!result[k].ok && result[k].outside) drop[panels[k]] = 1, ++dropped;
+    if (dropped > 0 && dropped < F) {
+      PolyMesh rest;
+      rest.V = mesh.V;
+      std::vector<int> restOf;  // the remaining faces' indices in `mesh`
+      for (int f = 0; f < F; ++f)
+        if (!drop[f]) rest.addFace(std::vector<int>(mesh.face(f), mesh.face(f) + mesh.faceSize(f))), restOf.push_back(f);
+      // Each node of a removed panel still on panels ends two outline edges (a fan with one gap), or none.
+      std::vector<int> ends(static_cast<std::size_t>(V), 0);
+      for (const auto& [a, b] : outlineEdges(rest)) ++ends[a], ++ends[b];
+      bool manifold = true;
+      for (int f = 0; f < F && manifold; ++f)
+        if (drop[f])
+          for (int i = 0; i < mesh.faceSize(f); ++i) manifold = manifold && (ends[mesh.face(f)[i]] == 0 || ends[mesh.face(f)[i]] == 2);
+      if (manifold) {
+        std::vector<int> inner;
+        BoundaryClip again = clipPanels(rest, surface, false, faceOf ? &inner : nullptr);
+        if (faceOf) {
+          for (int& f : inner) f = f >= 0 ? restOf[f] : -1;
+          *faceOf = std::move(inner);
+        }
+        again.removed = dropped;
+        mesh = std::move(rest);
+        return again;
       }
     }
   }
@@ -531,6 +585,7 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
   for (int a = 0; a < V; ++a)
     if (fromCorner[a] >= 0 && toCorner[a] >= 0) {
       faces.push_back({a, toCorner[a], fromCorner[a]});
+      if (faceOf) faceOf->push_back(-1);
       ++out.fillers;
     }
   std::vector<int> index(points.size(), -1);  // the nodes still used, in their order
@@ -558,6 +613,12 @@ BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface) {
   }
   mesh = std::move(next);
   return out;
+}
+
+}  // namespace
+
+BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface, std::vector<int>* faceOf) {
+  return clipPanels(mesh, surface, true, faceOf);
 }
 
 }  // namespace phex

@@ -2306,11 +2306,19 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
   if (params.clipBoundary && !surface.isClosed()) {  // (closed: no boundary curve)
     report("clip", 0, "clipping the boundary panels to the boundary curve");
     const PolyMesh unclipped = r.hex;
-    const std::size_t faces = r.dual.boundaryFace.size();
-    r.boundaryClip = clipBoundaryPanels(r.hex, surface);
-    // Its fillers, appended after the panels, are boundary panels dual to no vertex of the triangulation.
-    r.dual.boundaryFace.resize(static_cast<std::size_t>(r.hex.faceCount()), 1);
-    r.dual.faceVertex.resize(static_cast<std::size_t>(r.hex.faceCount()), -1);
+    const std::vector<std::uint8_t> boundaryFace = r.dual.boundaryFace;
+    const std::vector<int> faceVertex = r.dual.faceVertex;
+    std::vector<int> faceOf;
+    r.boundaryClip = clipBoundaryPanels(r.hex, surface, &faceOf);
+    // Panels outside the curve removed; its fillers, appended after the panels, are boundary panels dual to no
+    // vertex of the triangulation.
+    r.dual.boundaryFace.assign(faceOf.size(), 1);
+    r.dual.faceVertex.assign(faceOf.size(), -1);
+    for (std::size_t f = 0; f < faceOf.size(); ++f) {
+      const auto was = static_cast<std::size_t>(faceOf[f]);
+      if (faceOf[f] >= 0 && was < boundaryFace.size()) r.dual.boundaryFace[f] = boundaryFace[was];
+      if (faceOf[f] >= 0 && was < faceVertex.size()) r.dual.faceVertex[f] = faceVertex[was];
+    }
     // A node moved along its edge onto the curve carries the planarity the solve left its two panels (up to the
     // tolerance) to the shorter clipped edges: on a rough saddle at 1500 faces one face went from 7.9e-10 to
     // 1.1e-9. Such a mesh is settled by a few sweeps of the solver without the closeness term, else left unclipped.
@@ -2323,8 +2331,8 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
       planarize(r.hex, settle, {}, cancel);
       if (maxPlanarity(r.hex) > params.tolerance) {
         r.hex = unclipped;
-        r.dual.boundaryFace.resize(faces);
-        r.dual.faceVertex.resize(faces);
+        r.dual.boundaryFace = boundaryFace;
+        r.dual.faceVertex = faceVertex;
         r.boundaryClip = BoundaryClip{};
         r.triangulation.notes.push_back("the boundary panels were not clipped to the boundary curve: clipped, a panel "
                                         "was no longer planar to the tolerance");

@@ -231,3 +231,75 @@ TEST_CASE("pipeline: an uploaded shell's boundary panels are clipped to its boun
   // node stands off the curve (0.86 of an edge since dislocations glide: 1.02 edges off, a panel the clip leaves).
   CHECK(r.coverageGap < 1);
 }
+
+TEST_CASE("boundary clip: a panel wholly outside the curve is removed, and its neighbours clipped to the curve") {
+  const MeshSurface square(unitSquare());
+  // Two quads over the unit square and a sliver triangle hanging below its bottom edge, on the quads' shared
+  // node (0.5, 0): the curve (the square's edge) runs along the triangle's inner edge, so all of it is outside.
+  PolyMesh m;
+  m.V.resize(7, 3);
+  m.V << 0, 0, 0, 0.5, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 1, 0, 1, 1, 0, 0.25, -0.05, 0;
+  m.addFace({0, 1, 4, 3});
+  m.addFace({1, 2, 5, 4});
+  m.addFace({1, 0, 6});
+  std::vector<int> faceOf;
+  const BoundaryClip clip = clipBoundaryPanels(m, square, &faceOf);
+  CHECK(clip.removed == 1);
+  CHECK(clip.skipped == 0);
+  CHECK(clip.panels == 2);
+  REQUIRE(m.faceCount() == 2);
+  CHECK(faceOf == std::vector<int>{0, 1});
+  for (int v = 0; v < m.V.rows(); ++v) CHECK(m.V(v, 1) >= -1e-12);  // the triangle's outer node is gone
+  CHECK(clip.gapMax < 1e-9);
+  // The same mesh without the sliver: nothing removed, and the quads clipped as above.
+  PolyMesh two;
+  two.V.resize(6, 3);
+  two.V << 0, 0, 0, 0.5, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 1, 0, 1, 1, 0;
+  two.addFace({0, 1, 4, 3});
+  two.addFace({1, 2, 5, 4});
+  const BoundaryClip plain = clipBoundaryPanels(two, square);
+  CHECK(plain.removed == 0);
+  CHECK(plain.panels == 2);
+  REQUIRE(two.V.rows() == m.V.rows());
+  CHECK((two.V - m.V).norm() < 1e-12);
+  // A panel reaching over the curve only in part is not removed (it is left as it was, or clipped).
+  PolyMesh over;
+  over.V.resize(7, 3);
+  over.V << 0, 0, 0, 0.5, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 1, 0, 1, 1, 0, 0.25, -0.05, 0;
+  over.V.row(0) << 0, 0.2, 0;  // the quads' corner above the curve: the triangle straddles it
+  over.addFace({0, 1, 4, 3});
+  over.addFace({1, 2, 5, 4});
+  over.addFace({1, 0, 6});
+  const BoundaryClip partly = clipBoundaryPanels(over, square);
+  CHECK(partly.removed == 0);
+  CHECK(over.faceCount() == 3);
+}
+
+TEST_CASE("pipeline: a sliver of a boundary panel cut against a fold, outside the curve, is removed") {
+  // The hyperbolic paraboloid laid globally at 1000 faces cuts one boundary panel against a fold; the piece
+  // between the cut and the curve lies beyond the curve (its clipped outline turned over, so it was left unclipped
+  // with its neighbours' ends held): removed, every boundary panel is clipped.
+  PipelineParams p;
+  p.surface = "hyperbolic-paraboloid";
+  p.method = TriangulationMethod::Global;
+  p.faces = 1000;
+  const PipelineResult r = runPipeline(p);
+  REQUIRE(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.boundaryClip.removed == 1);
+  CHECK(r.boundaryClip.skipped == 0);
+  CHECK(r.boundaryClip.gapMax < 0.3);
+  REQUIRE(r.dual.faceVertex.size() == static_cast<std::size_t>(r.hex.faceCount()));
+  REQUIRE(r.dual.boundaryFace.size() == static_cast<std::size_t>(r.hex.faceCount()));
+  // Every node still on two edges of the outline or none (a manifold), and on at most four panels.
+  std::vector<int> ends(static_cast<std::size_t>(r.hex.V.rows()), 0), faces(ends.size(), 0);
+  for (const auto& [a, b] : outlineEdges(r.hex)) ++ends[a], ++ends[b];
+  for (int f = 0; f < r.hex.faceCount(); ++f)
+    for (int i = 0; i < r.hex.faceSize(f); ++i) ++faces[r.hex.face(f)[i]];
+  int torn = 0, lone = 0, crowded = 0;
+  for (std::size_t v = 0; v < ends.size(); ++v)
+    torn += ends[v] != 0 && ends[v] != 2, lone += faces[v] == 0, crowded += faces[v] > 3;
+  CHECK(torn == 0);
+  CHECK(lone == 0);
+  CHECK(crowded == 0);  // the cut's node of four went with the sliver
+}

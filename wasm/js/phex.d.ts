@@ -267,8 +267,10 @@ export interface Result {
    * (their clipped outline would cross itself), nodes moved along their shared edge onto the curve, curve
    * points added and one-panel boundary nodes they replaced, and `gapMax`: the edge as drawn, the largest distance
    * from the curve to the mesh's outline (the curve's height over the clipped panels' planes; where panels could
-   * not be clipped, how far their edges stay from it), in mean panel edges, at most 2. All 0 on a closed surface. */
-  boundaryClip: { panels: number; skipped: number; nodesMoved: number; nodesAdded: number; nodesRemoved: number; fillers: number; gapMax: number };
+   * not be clipped, how far their edges stay from it), in mean panel edges, at most 2; `removed`: boundary panels
+   * lying wholly outside the curve (a sliver of a panel cut against a fold), taken away before the panels then on
+   * the boundary were clipped. All 0 on a closed surface. */
+  boundaryClip: { panels: number; skipped: number; nodesMoved: number; nodesAdded: number; nodesRemoved: number; fillers: number; removed: number; gapMax: number };
   /** Method 'global''s second lay (`relay: 'on'`): whether it ran, whether this result is its, the metric it followed
    * (anisotropy, curvature floor), and how the first lay ended: whether it reached a P-Hex mesh, and the nodes of
    * four faces its cuts made (two per interior face cut, one per boundary panel). `tried` false: one lay. */

@@ -89,6 +89,11 @@ BoundaryOffset boundaryOffset(const PolyMesh& mesh, const Surface& surface);
 // outline; instead each of its two panels ends at a corner on the curve kFillerSpan mean edges (or half the node's
 // distance, where more) from the node's nearest point, and a triangle (planar whatever its corners) fills the gap between them: the outline follows the
 // curve and the node joins three panels (`fillers`).
+// A boundary panel whose outline, clipped, turns over (the curve, projected onto its plane, runs beyond its other
+// nodes into the surface) lies wholly outside the curve: such panels are removed where the mesh stays a manifold
+// without them, and the panels then on the boundary are clipped afresh (`removed`). They are pieces of a boundary
+// panel cut in two against a fold, a sliver between the cut and the curve (the uploaded bumps at 2000-5000 faces,
+// the bubble, the hyperbolic paraboloid), which no clip could follow.
 constexpr double kClipReach = 1.5;
 constexpr double kClipTolerance = 0.005;
 constexpr double kClipRetryTolerances[] = {0.1, 0.3};
@@ -101,11 +106,13 @@ struct BoundaryClip {
   int nodesAdded = 0;    // points of the curve added to the panels
   int nodesRemoved = 0;  // boundary nodes of one panel replaced by the curve
   int fillers = 0;       // triangles filling the gap at a shared node left off the curve (kFillerOff)
+  int removed = 0;       // boundary panels removed, lying wholly outside the curve
   // The edge as drawn: the largest distance of the curve's points to the P-Hex mesh's outline (the edges of one
   // panel), in mean edges (at most 2): the curve's height over the clipped panels' planes and the thinning, and
   // where panels could not be clipped, how far their edges stay from it.
   double gapMax = 0;
 };
-BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface);
+// `faceOf`, where given, gets for each face of the clipped mesh the index of the face it was (-1: a filler).
+BoundaryClip clipBoundaryPanels(PolyMesh& mesh, const Surface& surface, std::vector<int>* faceOf = nullptr);
 
 }  // namespace phex
