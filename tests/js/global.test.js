@@ -114,6 +114,18 @@ test('boundary nodes end on the surface\'s boundary curve (a clean edge), and a 
   assert.equal(r.boundaryClip.panels, 0);
 });
 
+test('a sliver of a boundary panel cut against a fold, lying outside the curve, is removed and its neighbours clipped', async () => {
+  // The hyperbolic paraboloid laid globally at 1000 faces: one boundary panel cut in two, the piece beyond the curve.
+  const r = await phex.run({ surface: 'hyperbolic-paraboloid', method: 'global', faces: 1000 });
+  assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9);
+  assert.equal(r.boundaryClip.removed, 1, JSON.stringify(r.boundaryClip));
+  assert.equal(r.boundaryClip.skipped, 0, JSON.stringify(r.boundaryClip));
+  assert.equal(r.metrics.boundaryFace.length, r.hex.faceOffsets.length - 1);
+  const off = await phex.run({ surface: 'hyperbolic-paraboloid', method: 'global', faces: 1000, clipBoundary: 'off' });
+  assert.equal(off.boundaryClip.removed, 0);
+  assert.equal(off.hex.faceOffsets.length - 1 - 1, r.hex.faceOffsets.length - 1 - r.boundaryClip.fillers);
+});
+
 test('where two boundary panels meet along the curve, a filler triangle closes the tooth (a clean edge on the bumps)', async () => {
   // The bumps laid globally at 2000 faces: along one side the panels' shared nodes stayed 0.26-0.42 edges inside
   // the curve (their shared edges run along it); each gets a filler triangle, and the outline follows the curve.
