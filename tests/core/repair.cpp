@@ -142,14 +142,21 @@ TEST_CASE("repair: the laying repairs and says so (free-form surface, Fig. 22)")
   CHECK(noted);
 }
 
-TEST_CASE("pipeline: auto picks the field as well; a too coarse cell is named, not a broken mesh") {
+TEST_CASE("pipeline: auto picks the method per surface, a named field is kept; a too coarse cell is named, not a broken mesh") {
   PipelineParams p;
-  p.surface = "elliptic-paraboloid";  // two umbilics inside: principal lines are singular there
+  // Auto tiles the elliptic paraboloid by the global method: rows along its parameter lines (its principal lines
+  // have two umbilics inside) met the square's sides slantwise and left a ragged edge.
+  p.surface = "elliptic-paraboloid";
+  CHECK(triangulate(p).method == TriangulationMethod::Global);
+  // The rows, named: along the parameter lines, every star valid.
+  p.method = TriangulationMethod::Prespecified;
+  p.field = "param";
   CHECK(resolveField(p) == "param");
   const TriangulationStage t = triangulate(p);
   CHECK(t.field == "param");
   CHECK(t.check.invalidStars.empty());
   CHECK(t.check.regularFraction >= 0.95);
+  p.method = TriangulationMethod::Auto;
   p.field = "angle:20";  // a field the caller names is kept
   CHECK(resolveField(p) == "angle:20");
   p.field = "principal";

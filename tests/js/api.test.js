@@ -289,16 +289,23 @@ test('after dispose() every call rejects with code cancelled', async () => {
   assert.equal(error.code, 'cancelled');
 });
 
-test("method 'auto' picks the field too and says which it used", async () => {
+test("method 'auto' picks the method and field per surface and says which it used", async () => {
   const spec = (await phex.surfaces()).find((s) => s.name === 'elliptic-paraboloid');
-  assert.equal(spec.field, 'param');
+  assert.equal(spec.method, 'global');  // rows along its parameter lines left a ragged edge
   const r = await phex.run({ surface: 'elliptic-paraboloid', faces: 600 });
-  assert.equal(r.method, 'prespecified');
+  assert.equal(r.method, 'global');
   assert.equal(r.solve.method, 'local');
-  assert.equal(r.field, 'param');
-  assert.equal(r.triangulation.check.invalidStars.length, 0);
+  assert.equal(r.field, '');
+  assert.ok(r.boundaryOffset.max <= 0.01, JSON.stringify(r.boundaryOffset));
   assert.equal(typeof r.metrics.parabolicFaceCount, 'number');
   assert.ok(r.metrics.interiorHexagonFraction >= 0.9, String(r.metrics.interiorHexagonFraction));
+  const vase = await phex.run({ surface: 'vase', faces: 600 });
+  assert.equal(vase.method, 'prespecified');
+  assert.equal(vase.field, 'principal');
+  assert.equal(vase.triangulation.check.invalidStars.length, 0);
+  const rows = await phex.run({ surface: 'elliptic-paraboloid', faces: 600, method: 'prespecified', field: 'param' });
+  assert.equal(rows.field, 'param');
+  assert.equal(rows.triangulation.check.invalidStars.length, 0);
   const named = await phex.run({ surface: 'elliptic-paraboloid', faces: 600, method: 'prespecified', field: 'angle:10' });
   assert.equal(named.field, 'angle:10');
   assert.equal(torus.field, ''); // the torus is laid as a lattice
