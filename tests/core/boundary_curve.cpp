@@ -234,14 +234,21 @@ TEST_CASE("pipeline: an uploaded shell's boundary panels are clipped to its boun
 
 TEST_CASE("boundary clip: a panel wholly outside the curve is removed, and its neighbours clipped to the curve") {
   const MeshSurface square(unitSquare());
-  // Two quads over the unit square and a sliver triangle hanging below its bottom edge, on the quads' shared
-  // node (0.5, 0): the curve (the square's edge) runs along the triangle's inner edge, so all of it is outside.
-  PolyMesh m;
-  m.V.resize(7, 3);
-  m.V << 0, 0, 0, 0.5, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 1, 0, 1, 1, 0, 0.25, -0.05, 0;
-  m.addFace({0, 1, 4, 3});
-  m.addFace({1, 2, 5, 4});
-  m.addFace({1, 0, 6});
+  // Two quads over the unit square and, with `sliver`, a triangle hanging below its bottom edge on the quads'
+  // shared node (0.5, 0): the curve (the square's edge) runs along the triangle's inner edge, so all of it is
+  // outside. `corner` moves the quads' corner (0, 0).
+  auto panels = [](bool sliver, const Vec3& corner) {
+    PolyMesh m;
+    m.V.resize(sliver ? 7 : 6, 3);
+    m.V.topRows(6) << 0, 0, 0, 0.5, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 1, 0, 1, 1, 0;
+    m.V.row(0) = corner.transpose();
+    if (sliver) m.V.row(6) << 0.25, -0.05, 0;
+    m.addFace({0, 1, 4, 3});
+    m.addFace({1, 2, 5, 4});
+    if (sliver) m.addFace({1, 0, 6});
+    return m;
+  };
+  PolyMesh m = panels(true, Vec3::Zero());
   std::vector<int> faceOf;
   const BoundaryClip clip = clipBoundaryPanels(m, square, &faceOf);
   CHECK(clip.removed == 1);
@@ -252,24 +259,15 @@ TEST_CASE("boundary clip: a panel wholly outside the curve is removed, and its n
   for (int v = 0; v < m.V.rows(); ++v) CHECK(m.V(v, 1) >= -1e-12);  // the triangle's outer node is gone
   CHECK(clip.gapMax < 1e-9);
   // The same mesh without the sliver: nothing removed, and the quads clipped as above.
-  PolyMesh two;
-  two.V.resize(6, 3);
-  two.V << 0, 0, 0, 0.5, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 1, 0, 1, 1, 0;
-  two.addFace({0, 1, 4, 3});
-  two.addFace({1, 2, 5, 4});
+  PolyMesh two = panels(false, Vec3::Zero());
   const BoundaryClip plain = clipBoundaryPanels(two, square);
   CHECK(plain.removed == 0);
   CHECK(plain.panels == 2);
   REQUIRE(two.V.rows() == m.V.rows());
   CHECK((two.V - m.V).norm() < 1e-12);
-  // A panel reaching over the curve only in part is not removed (it is left as it was, or clipped).
-  PolyMesh over;
-  over.V.resize(7, 3);
-  over.V << 0, 0, 0, 0.5, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 1, 0, 1, 1, 0, 0.25, -0.05, 0;
-  over.V.row(0) << 0, 0.2, 0;  // the quads' corner above the curve: the triangle straddles it
-  over.addFace({0, 1, 4, 3});
-  over.addFace({1, 2, 5, 4});
-  over.addFace({1, 0, 6});
+  // A panel reaching over the curve only in part is not removed (it is left as it was, or clipped): the quads'
+  // corner above the curve, the triangle straddles it.
+  PolyMesh over = panels(true, Vec3(0, 0.2, 0));
   const BoundaryClip partly = clipBoundaryPanels(over, square);
   CHECK(partly.removed == 0);
   CHECK(over.faceCount() == 3);
