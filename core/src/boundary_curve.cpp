@@ -420,9 +420,12 @@ BoundaryClip clipPanels(PolyMesh& mesh, const Surface& surface, bool mayRemove, 
             if (at > from && at < to) trimmed.push_back(piece[q]);
           }
           trimmed.push_back(pointAlong(piece, to));
-          // (The corners no farther off the surface than the farthest node: the mesh's largest distance stays.)
-          const bool nearA = !offA || (project(trimmed.front()) - trimmed.front()).norm() <= farthestNode;
-          const bool nearB = !offB || (project(trimmed.back()) - trimmed.back()).norm() <= farthestNode;
+          // (The corners no farther off the surface than the run's other corners may lie: the farthest node, or half
+          // the distance goal. Held to the farthest node alone, the rows' boundary panels on the hyperboloid, the
+          // vase and the hyperbolic paraboloid kept most of their teeth: the curve stands a little higher over a
+          // panel's plane than a node fitted to the surface.)
+          const bool nearA = !offA || (project(trimmed.front()) - trimmed.front()).norm() <= farthest;
+          const bool nearB = !offB || (project(trimmed.back()) - trimmed.back()).norm() <= farthest;
           if (nearA && nearB) piece = std::move(trimmed);
           else offA = offB = false;  // the curve stands too high over the panel's plane there
         } else {
