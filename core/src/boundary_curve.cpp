@@ -333,7 +333,8 @@ BoundaryClip clipPanels(PolyMesh& mesh, const Surface& surface, bool mayRemove, 
     return cache[k][a];
   };
 
-  auto clip = [&](int f, double tolerance) {  // the curve followed to `tolerance` mean edges
+  // The curve followed to `tolerance` mean edges; `fillers`: ends left off the curve get a filler's corner.
+  auto clip = [&](int f, double tolerance, bool fillers) {
     Clipped c;
     const int n = mesh.faceSize(f);
     const int* ids = mesh.face(f);
@@ -393,8 +394,8 @@ BoundaryClip clipPanels(PolyMesh& mesh, const Surface& surface, bool mayRemove, 
       // kFillerSpan mean edges along the run from its nearest point, for the filler panel between it and the
       // neighbouring panel's such corner (below); where the run is too short for the corners, it keeps its tooth.
       // (Only at a node of two panels: the filler makes it one of three.)
-      bool offA = nodeFaces[a] == 2 && (ea.w - ea.c).norm() > kFillerOff * h;
-      bool offB = nodeFaces[b] == 2 && (eb.w - eb.c).norm() > kFillerOff * h;
+      bool offA = fillers && nodeFaces[a] == 2 && (ea.w - ea.c).norm() > kFillerOff * h;
+      bool offB = fillers && nodeFaces[b] == 2 && (eb.w - eb.c).norm() > kFillerOff * h;
       if (offA || offB) {
         double length = 0;
         for (std::size_t q = 1; q < piece.size(); ++q) length += (piece[q] - piece[q - 1]).norm();
@@ -504,9 +505,17 @@ BoundaryClip clipPanels(PolyMesh& mesh, const Surface& surface, bool mayRemove, 
   for (bool changed = true; changed;) {
     changed = false;
     for (std::size_t k = 0; k < panels.size(); ++k) {
-      result[k] = clip(panels[k], kClipTolerance);
+      result[k] = clip(panels[k], kClipTolerance, true);
       for (double tolerance : kClipRetryTolerances)
-        if (!result[k].ok) result[k] = clip(panels[k], tolerance);
+        if (!result[k].ok) result[k] = clip(panels[k], tolerance, true);
+      // Without its fillers' corners (its ends then stay where they are, a notch in the outline beside the
+      // neighbour's corner) rather than not at all; not a panel found outside the curve (removed below).
+      if (!result[k].ok && !result[k].outside) {
+        Clipped plain = clip(panels[k], kClipTolerance, false);
+        for (double tolerance : kClipRetryTolerances)
+          if (!plain.ok) plain = clip(panels[k], tolerance, false);
+        if (plain.ok) result[k] = std::move(plain);
+      }
       if (result[k].ok) continue;
       // Its ends are those of the original runs: the face's boundary nodes next to a two-face edge.
       const int f = panels[k], n = mesh.faceSize(f);
