@@ -464,18 +464,16 @@ BoundaryClip clipPanels(PolyMesh& mesh, const Surface& surface, bool mayRemove, 
     // In the plane: simple, turning as the panel did, and its fan from the first corner inside it (the viewers
     // fan polygons from their first corner): rotated to a corner from which it is, where one is.
     Vec3 u = plane.normal.unitOrthogonal(), v = plane.normal.cross(u);
+    auto inPlane = [&](const Vec3& x) { return Vec2((x - plane.centroid).dot(u), (x - plane.centroid).dot(v)); };
     std::vector<Vec2> q;
-    for (const Vec3& x : position) q.emplace_back((x - plane.centroid).dot(u), (x - plane.centroid).dot(v));
+    for (const Vec3& x : position) q.push_back(inPlane(x));
     const bool crosses = polygonSelfIntersects(q);
     if (crosses || !(signedArea(q) > 0)) {
       // A simple outline turned over, where the panel itself is simple and turns the right way: the curve passes
       // beyond the panel's nodes into the surface, so all of the panel lies outside it.
       if (!crosses) {
         std::vector<Vec2> own;
-        for (int i = 0; i < n; ++i) {
-          const Vec3 x = mesh.vertex(ids[i]);
-          own.emplace_back((x - plane.centroid).dot(u), (x - plane.centroid).dot(v));
-        }
+        for (int i = 0; i < n; ++i) own.push_back(inPlane(mesh.vertex(ids[i])));
         c.outside = !polygonSelfIntersects(own) && signedArea(own) > 0;
       }
       return c;
@@ -501,19 +499,22 @@ BoundaryClip clipPanels(PolyMesh& mesh, const Surface& surface, bool mayRemove, 
         panels.push_back(f);
         break;
       }
+  // The curve followed closely, then with fewer corners (kClipRetryTolerances) where that fails.
+  auto clipRetried = [&](int f, bool fillers) {
+    Clipped c = clip(f, kClipTolerance, fillers);
+    for (double tolerance : kClipRetryTolerances)
+      if (!c.ok) c = clip(f, tolerance, fillers);
+    return c;
+  };
   std::vector<Clipped> result(panels.size());
   for (bool changed = true; changed;) {
     changed = false;
     for (std::size_t k = 0; k < panels.size(); ++k) {
-      result[k] = clip(panels[k], kClipTolerance, true);
-      for (double tolerance : kClipRetryTolerances)
-        if (!result[k].ok) result[k] = clip(panels[k], tolerance, true);
+      result[k] = clipRetried(panels[k], true);
       // Without its fillers' corners (its ends then stay where they are, a notch in the outline beside the
       // neighbour's corner) rather than not at all; not a panel found outside the curve (removed below).
       if (!result[k].ok && !result[k].outside) {
-        Clipped plain = clip(panels[k], kClipTolerance, false);
-        for (double tolerance : kClipRetryTolerances)
-          if (!plain.ok) plain = clip(panels[k], tolerance, false);
+        Clipped plain = clipRetried(panels[k], false);
         if (plain.ok) result[k] = std::move(plain);
       }
       if (result[k].ok) continue;
@@ -545,8 +546,10 @@ BoundaryClip clipPanels(PolyMesh& mesh, const Surface& surface, bool mayRemove, 
       for (const auto& [a, b] : outlineEdges(rest)) ++ends[a], ++ends[b];
       bool manifold = true;
       for (int f = 0; f < F && manifold; ++f)
-        if (drop[f])
-          for (int i = 0; i < mesh.faceSize(f); ++i) manifold = manifold && (ends[mesh.face(f)[i]] == 0 || ends[mesh.face(f)[i]] == 2);
+        for (int i = 0; drop[f] && i < mesh.faceSize(f); ++i) {
+          const int e = ends[mesh.face(f)[i]];
+          manifold = manifold && (e == 0 || e == 2);
+        }
       if (manifold) {
         std::vector<int> inner;
         BoundaryClip again = clipPanels(rest, surface, false, faceOf ? &inner : nullptr);
