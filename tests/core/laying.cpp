@@ -596,9 +596,11 @@ TEST_CASE("laying: rows crossing the hyperboloid end on its rims, not up to a sp
   // wherever its last sample fell, up to a spacing below the rim, and every other row a notch deeper (coverage
   // 0.896 at 2000 faces). Now a row end is extended onto the rim, or moved onto it where it is closer than
   // half a spacing, and the notch between two row ends closed: measured coverage 0.998, no invalid star, and
-  // 168 of the 176 boundary vertices on the rims (the others where L0's two fronts start and meet).
+  // 168 of the 176 boundary vertices on the rims (the others where L0's two fronts start and meet). (Method 2
+  // named: auto lays the hyperboloid's parameter lattice.)
   PipelineParams p;
   p.surface = "hyperboloid";
+  p.method = TriangulationMethod::Prespecified;
   p.faces = 2000;
   const TriangulationStage t = triangulate(p);
   const TriMesh& T = t.triangulation.mesh;
