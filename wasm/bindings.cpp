@@ -286,6 +286,8 @@ val resultToJs(const phex::PipelineResult& r) {
   relay.set("curvatureFloor", r.relay.curvatureFloor);
   relay.set("firstReached", r.relay.firstReached);
   relay.set("firstNodesOfFour", r.relay.firstNodesOfFour);
+  relay.set("globally", r.relay.globally);
+  relay.set("firstCoverageGap", r.relay.firstCoverageGap);
   out.set("relay", relay);
   val origin = val::array();
   for (int k = 0; k < 3; ++k) origin.call<void>("push", r.origin(k));

@@ -444,7 +444,11 @@ function showStats({ metrics, solve, timings, method, field, triangulation, dual
     solve.interiorFacesSplit ? `, ${solve.interiorFacesSplit} interior face${solve.interiorFacesSplit > 1 ? 's' : ''} split` : ''}${
     duality === 'tangent' && $('duality').value === 'auto' ? ', from the tangent dual' : ''}${
     solve.foldsAllowed ? ', solved without the fold guard (none left folded)' : ''}${
-    relay?.tried ? `, laid twice (the ${relay.kept ? 'second' : 'first'} lay kept)` : ''}`;
+    relay?.tried
+      ? relay.globally
+        ? `, laid twice (Method 2's rows left the upload ${relay.firstCoverageGap.toFixed(2)} edges bare: ${relay.kept ? 'tiled by the global method' : 'the rows kept'})`
+        : `, laid twice (the ${relay.kept ? 'second' : 'first'} lay kept)`
+      : ''}`;
   $('timings').textContent = Object.entries(timings)
     .filter(([stage]) => stage !== 'total')
     .map(([stage, t]) => `${stage} ${ms(t)}`)

@@ -65,8 +65,11 @@ Options of `phex run`:
                             near-developable surface's elongated indicatrix further, up to --anisotropy)
   --relay on|off            global: where the lay does not reach a P-Hex mesh, or its cuts make nodes of
                             four faces at over 5 % of its faces, lay it again following the Dupin metric
-                            further (anisotropy 2.5, curvature floor 0.05) and keep the better (report:
-                            relay; not on noisy uploads) (default on)
+                            further (anisotropy 2.5, curvature floor 0.05) and keep the better (not on noisy
+                            uploads); an upload under auto whose Method 2 rows leave a point of it over a
+                            mean panel edge from any panel (or reach no P-Hex mesh): tile it by the global
+                            method and keep that where it reaches one covering the upload more closely
+                            (report: relay) (default on)
   --fold-flips on|off       global: where the dual solved with folds allowed has faces crossing themselves
                             (at most 8 % of them), merge each one's vertex with its neighbour along the
                             flatter principal direction (else flip an edge of its star) and solve again:
@@ -294,9 +297,10 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"solver", {{"iterations", r.solve.iterations}, {"rounds", r.solve.rounds}, {"converged", r.solve.converged},
                       {"boundaryPanelsSplit", r.boundaryPanelsSplit}, {"interiorFacesSplit", r.interiorFacesSplit},
                       {"foldsAllowed", r.foldsAllowed}, {"method", phex::methodName(r.solverUsed)}, {"log", log}}},
-          {"relay", {{"tried", r.relay.tried}, {"kept", r.relay.kept}, {"anisotropy", r.relay.anisotropy},
-                     {"curvatureFloor", r.relay.curvatureFloor}, {"firstReached", r.relay.firstReached},
-                     {"firstNodesOfFour", r.relay.firstNodesOfFour}}},
+          {"relay", {{"tried", r.relay.tried}, {"kept", r.relay.kept}, {"globally", r.relay.globally},
+                     {"anisotropy", r.relay.anisotropy}, {"curvatureFloor", r.relay.curvatureFloor},
+                     {"firstReached", r.relay.firstReached}, {"firstNodesOfFour", r.relay.firstNodesOfFour},
+                     {"firstCoverageGap", r.relay.firstCoverageGap}}},
           {"surfaceFit", {{"applied", r.solve.surfaceFitted}, {"distanceBefore", r.solve.surfaceDistanceBefore},
                           {"distanceAfter", r.solve.surfaceDistanceAfter}, {"freeNodesSettled", r.solve.freeNodesSettled},
                           {"boundaryNodesPlaced", r.solve.boundaryNodesPlaced}}},

@@ -713,9 +713,11 @@ TEST_CASE("pipeline: rows ending on an uploaded mesh's boundary keep its P-Hex v
   // distance 6.0e-5 of the diagonal, 3.6e-5 with rows ending short of the boundary, 1.3e-3 with every end
   // joined; coverage 0.980, was 0.968; shortest triangulation edge 0.51 of the mean, no interior face cut —
   // at the cell the area estimate gave. The cell the start trial predicts lays 9800 vertices, not 10700:
-  // shortest edge 0.45 of the mean.)
+  // shortest edge 0.45 of the mean.) Method 2 named: its rows leave a spot 2.2 mean panel edges bare here, so auto
+  // tiles this upload by the global method now.
   PipelineParams p;
   p.mesh = sampledUpload("wave-roof", 60000);
+  p.method = TriangulationMethod::Prespecified;
   p.faces = 10000;
   const PipelineResult r = runPipeline(p);
   const std::string notes = allNotes(r.triangulation);
@@ -1031,6 +1033,7 @@ TEST_CASE("pipeline: a coarse upload laid finer than its triangles is laid on a 
   const auto dome = [](double x, double y) { return 0.5 - 0.25 * (x * x + y * y); };
   PipelineParams p;
   p.mesh = heightFieldUpload("sketch", 8, dome);
+  p.relay = false;  // auto's rows as they are (they leave a corner 2 panel edges bare: with relay, tiled globally)
   p.faces = 3000;
   const PipelineResult r = runPipeline(p);
   const std::string notes = allNotes(r.triangulation);
@@ -1060,6 +1063,7 @@ TEST_CASE("pipeline: a coarse upload laid finer than its triangles is laid on a 
   // no crease. Refined, without a crease note (on its facets it stopped short of planarity, exit 2).
   p.mesh = heightFieldUpload("low-poly", 8, [](double x, double y) { return std::sqrt(std::max(0.0, 2.05 - x * x - y * y)); });
   p.faces = 1000;
+  p.relay = true;
   const MeshSurface lowPoly(readMeshBytes(p.mesh->bytes.data(), p.mesh->bytes.size(), "obj", "low-poly.obj"));
   CHECK(lowPoly.creases().edges > 0);
   CHECK_FALSE(lowPoly.creases().sharp());
@@ -1450,8 +1454,28 @@ TEST_CASE("pipeline: under auto, an upload that Method 2's rows leave partly bar
   CHECK(bare.coverageGap <= kCoverageGapGoal);
   CHECK(bare.metrics.planarityMax <= 1e-9);
   CHECK(bare.metrics.selfIntersectingCount == 0);
-  p.mesh = sampledUpload("hyperboloid", 20000);
+  // Where the rows cover the upload to within the goal they stay (a cylinder sampled: 100 % hexagons); where
+  // their panels leave a spot farther than a mean panel edge from any panel (the hyperboloid sampled, at 1000
+  // faces; its rows' own check passes them), the global method tiles it again and is kept.
+  p.mesh = sampledUpload("cylinder", 20000);
   const PipelineResult covered = runPipeline(p);
+  INFO(allNotes(covered.triangulation));
   CHECK(covered.method == TriangulationMethod::Prespecified);
-  CHECK(allNotes(covered.triangulation).find("stopped short there") == std::string::npos);
+  CHECK_FALSE(covered.relay.tried);
+  CHECK(covered.coverageGap <= kCoverageGapGoal);
+  p.mesh = sampledUpload("hyperboloid", 20000);
+  const PipelineResult relaid = runPipeline(p);
+  INFO(allNotes(relaid.triangulation));
+  CHECK(allNotes(relaid.triangulation).find("stopped short there") == std::string::npos);
+  CHECK(relaid.relay.tried);
+  CHECK(relaid.relay.globally);
+  CHECK(relaid.relay.kept);
+  CHECK(relaid.relay.firstCoverageGap > kCoverageGapGoal);
+  CHECK(relaid.method == TriangulationMethod::Global);
+  CHECK(relaid.coverageGap <= kCoverageGapGoal);
+  CHECK(relaid.metrics.planarityMax <= 1e-9);
+  CHECK(relaid.metrics.selfIntersectingCount == 0);
+  // With relay off the rows stand.
+  p.relay = false;
+  CHECK(runPipeline(p).method == TriangulationMethod::Prespecified);
 }

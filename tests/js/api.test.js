@@ -399,7 +399,8 @@ test('a coarse upload laid finer than its triangles is laid on its smooth refine
     const x = -1 + 2 * u, y = -1 + 2 * v;
     return [x, y, 0.5 - 0.25 * (x * x + y * y)];
   });
-  const upload = { mesh, meshFormat: 'obj', meshName: 'sketch.obj', faces: 3000 };
+  // (Its rows as auto lays them: they leave a corner 2 panel edges bare, which relay tiles again globally, below.)
+  const upload = { mesh, meshFormat: 'obj', meshName: 'sketch.obj', faces: 3000, relay: 'off' };
   await phex.clearUploadCache();
   const r = await phex.run(upload);
   assert.ok(r.triangulation.notes.some((note) => /coarse for this lay/.test(note) && /smooth surface/.test(note)));
@@ -410,6 +411,10 @@ test('a coarse upload laid finer than its triangles is laid on its smooth refine
   const again = await phex.run(upload);
   assert.equal(again.surfaceReused, true);
   assert.deepEqual(again.hex.positions, r.hex.positions);
+  const covered = await phex.run({ ...upload, relay: 'on' });
+  assert.deepEqual([covered.relay.globally, covered.relay.kept, covered.method], [true, true, 'global']);
+  assert.ok(covered.coverageGap <= 1 && r.coverageGap > 1, `${r.coverageGap} -> ${covered.coverageGap}`);
+  assert.ok(covered.metrics.interiorHexagonFraction >= 0.95, String(covered.metrics.interiorHexagonFraction));
   await phex.clearUploadCache();
 });
 

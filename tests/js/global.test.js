@@ -3,7 +3,7 @@
 // Run: node --no-experimental-fetch --test tests/js/   (after `make wasm`)
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
-import { createPHex, PARAMETERS, PHexError } from '../../build/pkg/phex.js';
+import { createPHex, meshToOBJ, PARAMETERS, PHexError } from '../../build/pkg/phex.js';
 import { assertClosedDual, assertNoCut, assertSingularities, blobOFF } from './meshes.js';
 
 let phex;
@@ -208,4 +208,22 @@ test("foldFlips reaches the core: on the torus the notes say how many vertices w
   const plain = await phex.run({ surface: 'torus', faces: 3000, method: 'global', foldFlips: 'off' });
   assert.ok(!plain.triangulation.notes.some((n) => /faces crossing themselves \(each such face would otherwise be cut/.test(n)), 'none when off');
   assert.ok(r.solve.interiorFacesSplit < plain.solve.interiorFacesSplit, `${r.solve.interiorFacesSplit} cut, ${plain.solve.interiorFacesSplit} without flips`);
+});
+
+test("relay reaches the core: an upload whose Method 2 rows leave a spot bare is tiled again by the global method", async () => {
+  // The hyperboloid sampled by its parameter lattice (as an upload): one system of rows covers it, but their panels
+  // leave a spot over a mean panel edge from any panel at 1000 faces; the global method covers it.
+  const sample = await phex.run({ surface: 'hyperboloid', method: 'lattice', faces: 20000, surfaceFit: 'off', clipBoundary: 'off' });
+  const mesh = new TextEncoder().encode(meshToOBJ(sample.triangulation));
+  const r = await phex.run({ mesh, meshFormat: 'obj', faces: 1000 });
+  assert.deepEqual([r.relay.tried, r.relay.globally, r.relay.kept], [true, true, true], JSON.stringify(r.relay));
+  assert.ok(r.relay.firstCoverageGap > 1, String(r.relay.firstCoverageGap));
+  assert.equal(r.method, 'global');
+  assert.ok(r.coverageGap <= 1, String(r.coverageGap));
+  assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9);
+  assert.ok(r.triangulation.notes.some((n) => /laid again by the global method/.test(n)), r.triangulation.notes.join('\n'));
+  const rows = await phex.run({ mesh, meshFormat: 'obj', faces: 1000, relay: 'off' });
+  assert.equal(rows.method, 'prespecified');
+  assert.equal(rows.relay.tried, false);
+  assert.ok(rows.coverageGap > 1, String(rows.coverageGap));
 });

@@ -271,10 +271,12 @@ export interface Result {
    * lying wholly outside the curve (a sliver of a panel cut against a fold), taken away before the panels then on
    * the boundary were clipped. All 0 on a closed surface. */
   boundaryClip: { panels: number; skipped: number; nodesMoved: number; nodesAdded: number; nodesRemoved: number; fillers: number; removed: number; gapMax: number };
-  /** Method 'global''s second lay (`relay: 'on'`): whether it ran, whether this result is its, the metric it followed
-   * (anisotropy, curvature floor), and how the first lay ended: whether it reached a P-Hex mesh, and the nodes of
-   * four faces its cuts made (two per interior face cut, one per boundary panel). `tried` false: one lay. */
-  relay: { tried: boolean; kept: boolean; anisotropy: number; curvatureFloor: number; firstReached: boolean; firstNodesOfFour: number };
+  /** A second lay (`relay: 'on'`): whether it ran, whether this result is its, and how the first lay ended: whether
+   * it reached a P-Hex mesh, the nodes of four faces its cuts made (two per interior face cut, one per boundary
+   * panel) and its coverage gap (mean panel edges). Either method 'global''s lay again following the Dupin metric
+   * further (the anisotropy and curvature floor it followed), or (`globally`) an upload under 'auto' that Method 2's
+   * rows left partly bare (coverage gap over 1) or unsolved, tiled by the global method. `tried` false: one lay. */
+  relay: { tried: boolean; kept: boolean; globally: boolean; anisotropy: number; curvatureFloor: number; firstReached: boolean; firstNodesOfFour: number; firstCoverageGap: number };
   /** An upload far from the origin (more than ten times its size: site coordinates) is computed about the
    * centre of its box, this point, where its coordinates keep their digits; every mesh and note here is in the
    * file's coordinates all the same. [0, 0, 0] otherwise. */
@@ -422,7 +424,9 @@ export interface RunParams {
    * Method 'global': where the lay does not reach a P-Hex mesh (not converged, faces crossing themselves or nodes
    * far off), or its cuts make nodes of four faces at over 5 % of its faces, it is laid again following the Dupin
    * metric further (anisotropy 2.5, curvature floor 0.05) and the better kept ('on', default; not on noisy
-   * uploads). `result.relay` says what ran. 'off': the first lay stands.
+   * uploads). Under 'auto', an upload whose Method 2 rows leave a point of it over a mean panel edge from any panel
+   * (or reach no P-Hex mesh) is tiled by the global method, kept where it reaches one covering the upload more
+   * closely. `result.relay` says what ran. 'off': the first lay stands.
    */
   relay?: 'on' | 'off';
   /**

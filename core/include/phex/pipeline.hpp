@@ -184,11 +184,16 @@ struct PipelineResult {
   // The global method's second lay (PipelineParams::relay): whether it ran, whether its result is the one here,
   // the metric it followed, and how the first lay ended (converged to a P-Hex mesh or not; the nodes of four faces
   // its cuts made). The stages' timings are both lays'.
+  // A second lay (`relay`, on by default): the global method's again following the Dupin metric further where its
+  // first lay fell short, or (`globally`) an upload under auto that Method 2's rows left partly bare (coverage gap
+  // over the goal) or unsolved, tiled by the global method; `kept`: the second lay's result is the one returned.
   struct Relay {
     bool tried = false, kept = false;
+    bool globally = false;
     double anisotropy = 0, curvatureFloor = 0;
     bool firstReached = false;
     int firstNodesOfFour = 0;
+    double firstCoverageGap = 0;  // (globally) the rows' coverage gap, in mean panel edges
   } relay;
   std::vector<StageTiming> timings;
   double totalMilliseconds = 0.0;
