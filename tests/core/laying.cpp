@@ -682,6 +682,7 @@ TEST_CASE("laying: a Method 2 row that leaves the field onto an asymptotic direc
   // direction" though the field is principal. Only L0 fails that way; later rows get no apex there.
   PipelineParams p;
   p.surface = "helicoid";
+  p.method = TriangulationMethod::Prespecified;  // (auto tiles the helicoid by the global method)
   p.surfaceParams = {{"radius", 2.985}};
   p.faces = 1153;
   const PipelineResult r = runPipeline(p);
@@ -699,6 +700,7 @@ TEST_CASE("laying: a Method 2 row that leaves the field onto an asymptotic direc
   // the message asks for a smaller cell instead of another field (the helicoid at 12 faces).
   PipelineParams c;
   c.surface = "helicoid";
+  c.method = TriangulationMethod::Prespecified;
   c.faces = 12;
   checkCannotTile([&] { runPipeline(c); }, "smaller cell");
 }
