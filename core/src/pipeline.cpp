@@ -2429,6 +2429,21 @@ void addTimings(PipelineResult& kept, const PipelineResult& first, const Pipelin
   kept.totalMilliseconds = first.totalMilliseconds + second.totalMilliseconds;
 }
 
+// A second lay of `params` after `first`: its result, or none where it cannot be laid at all (a cancellation goes on to
+// the caller): `first` then stands, with `relay` and a note saying so (`what` the second lay, `kept` the first).
+std::optional<PipelineResult> layAgain(const PipelineParams& params, PipelineResult& first, const PipelineResult::Relay& relay,
+                                       const std::string& what, const std::string& kept, const ProgressFn& progress,
+                                       const CancelFlag* cancel) {
+  try {
+    return runOnce(params, progress, cancel);
+  } catch (const Error& e) {
+    if (e.code() == ErrorCode::Cancelled) throw;
+    first.relay = relay;
+    first.triangulation.notes.push_back(what + ", the surface could not be tiled (" + e.what() + "): " + kept + " kept");
+    return std::nullopt;
+  }
+}
+
 // An upload under auto that Method 2's rows left partly bare (a point of it farther than the coverage goal from
 // any panel: rows zipped or ending short of a rim) or did not bring to a P-Hex mesh, tiled again by the global
 // method; that one is kept where it reaches a P-Hex mesh and covers the upload more closely. The rows' own check
@@ -2450,16 +2465,10 @@ PipelineResult coveredGlobally(PipelineResult first, const PipelineParams& param
   relay.firstReached = reached(first);
   relay.firstNodesOfFour = nodesOfFourCut(first);
   relay.firstCoverageGap = first.coverageGap;
-  PipelineResult second;
-  try {
-    second = runOnce(global, progress, cancel);
-  } catch (const Error& e) {
-    if (e.code() == ErrorCode::Cancelled) throw;
-    first.relay = relay;
-    first.triangulation.notes.push_back(std::string("laid again by the global method, the upload could not be tiled (") +
-                                        e.what() + "): Method 2's rows are kept");
-    return first;
-  }
+  std::optional<PipelineResult> laid =
+      layAgain(global, first, relay, "laid again by the global method", "Method 2's rows are", progress, cancel);
+  if (!laid) return first;
+  PipelineResult& second = *laid;
   const bool better = reached(second) && (!reached(first) || second.coverageGap < first.coverageGap);
   relay.kept = better;
   PipelineResult& kept = better ? second : first;
@@ -2500,18 +2509,13 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   relay.curvatureFloor = again.curvatureFloor;
   relay.firstReached = reached(first);
   relay.firstNodesOfFour = nodesOfFourCut(first);
-  PipelineResult second;
-  try {
-    second = runOnce(again, progress, cancel);
-  } catch (const Error& e) {
-    // The first lay stands where the second cannot be laid at all (a cancellation goes on to the caller).
-    if (e.code() == ErrorCode::Cancelled) throw;
-    first.relay = relay;
-    first.triangulation.notes.push_back(std::string("laid again following the Dupin metric further, the surface could "
-                                                    "not be tiled (") + e.what() + "): the first lay is kept");
+  std::optional<PipelineResult> laid =
+      layAgain(again, first, relay, "laid again following the Dupin metric further", "the first lay is", progress, cancel);
+  if (!laid) {
     if (progress) progress({"done", 1, "done"});
     return first;
   }
+  PipelineResult& second = *laid;
   // The one that reached a P-Hex mesh; both did: the one whose cuts made fewer nodes of four faces (then more
   // hexagons); neither: the first.
   const bool better = reached(second) != reached(first)
