@@ -1492,4 +1492,17 @@ TEST_CASE("pipeline: under auto, an upload that Method 2's rows leave partly bar
   // With relay off the rows stand.
   p.relay = false;
   CHECK(runPipeline(p).method == TriangulationMethod::Prespecified);
+  // Rows that reach a P-Hex mesh only by cutting faces (the vase sampled with 6000 vertices, at 3000 faces: boundary
+  // panels cut where its rows end on the rims): the global method's, whose cuts make fewer nodes of four, is kept.
+  p.relay = true;
+  p.mesh = sampledUpload("vase", 6000);
+  p.faces = 3000;
+  const PipelineResult cut = runPipeline(p);
+  INFO(allNotes(cut.triangulation));
+  CHECK(cut.relay.globally);
+  CHECK(cut.relay.firstNodesOfFour > 0);
+  CHECK(cut.relay.kept);
+  CHECK(cut.method == TriangulationMethod::Global);
+  CHECK(2 * cut.interiorFacesSplit + cut.boundaryPanelsSplit < cut.relay.firstNodesOfFour);
+  CHECK(cut.coverageGap <= kCoverageGapGoal);
 }
