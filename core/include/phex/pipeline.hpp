@@ -181,12 +181,12 @@ struct PipelineResult {
   // of its box, `origin`, where its coordinates keep their digits; the meshes here and the notes are in the
   // file's coordinates, `surface` in the local frame (its points plus origin are the file's). Zero otherwise.
   Vec3 origin = Vec3::Zero();
-  // The global method's second lay (PipelineParams::relay): whether it ran, whether its result is the one here,
-  // the metric it followed, and how the first lay ended (converged to a P-Hex mesh or not; the nodes of four faces
-  // its cuts made). The stages' timings are both lays'.
-  // A second lay (`relay`, on by default): the global method's again following the Dupin metric further where its
-  // first lay fell short, or (`globally`) an upload under auto that Method 2's rows left partly bare (coverage gap
-  // over the goal) or unsolved, tiled by the global method; `kept`: the second lay's result is the one returned.
+  // A second lay (PipelineParams::relay, on by default): the global method's again, following the Dupin metric
+  // further, where its first lay fell short; or (`globally`) an upload under auto that Method 2's rows left partly
+  // bare (coverage gap over the goal), brought to a P-Hex mesh only by cuts, or did not bring to one, tiled by the
+  // global method. Whether it ran, whether its result is the one here (`kept`), the metric it followed, and how the
+  // first lay ended (a P-Hex mesh or not, the nodes of four faces its cuts made, its coverage gap). The stages'
+  // timings are both lays'.
   struct Relay {
     bool tried = false, kept = false;
     bool globally = false;
