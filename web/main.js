@@ -446,7 +446,7 @@ function showStats({ metrics, solve, timings, method, field, triangulation, dual
     solve.foldsAllowed ? ', solved without the fold guard (none left folded)' : ''}${
     relay?.tried
       ? relay.globally
-        ? `, laid twice (Method 2's rows left the upload ${relay.firstCoverageGap.toFixed(2)} edges bare: ${relay.kept ? 'tiled by the global method' : 'the rows kept'})`
+        ? `, laid twice (Method 2's rows: ${relay.firstCoverageGap.toFixed(2)} edges bare at most, ${relay.firstNodesOfFour} nodes of four from cuts; ${relay.kept ? 'tiled by the global method' : 'the rows kept'})`
         : `, laid twice (the ${relay.kept ? 'second' : 'first'} lay kept)`
       : ''}`;
   $('timings').textContent = Object.entries(timings)

@@ -2417,8 +2417,22 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
   return r;
 }
 
-// Both lays' time, stage by stage (in the order the first ran them), onto `kept`.
-void addTimings(PipelineResult& kept, const PipelineResult& first, const PipelineResult& second) {
+// What a second lay records of the first: that it ran, and how the first ended.
+PipelineResult::Relay relayAfter(const PipelineResult& first) {
+  PipelineResult::Relay relay;
+  relay.tried = true;
+  relay.firstReached = reached(first);
+  relay.firstNodesOfFour = nodesOfFourCut(first);
+  relay.firstCoverageGap = first.coverageGap;
+  return relay;
+}
+
+// The result kept after a second lay: its `relay`, the surface reuse of the first lay (the second reuses the
+// surface the first read), and both lays' time, stage by stage (in the order the first ran them).
+void keepAfterRelay(PipelineResult& kept, const PipelineResult& first, const PipelineResult& second,
+                    const PipelineResult::Relay& relay) {
+  kept.relay = relay;
+  kept.surfaceReused = first.surfaceReused;
   std::vector<StageTiming> timings = first.timings;
   for (const StageTiming& t : second.timings) {
     auto same = std::find_if(timings.begin(), timings.end(), [&](const StageTiming& s) { return s.stage == t.stage; });
@@ -2463,11 +2477,8 @@ PipelineResult coveredGlobally(PipelineResult first, const PipelineParams& param
   PipelineParams global = params;
   global.method = TriangulationMethod::Global;
   if (progress) progress({"triangulate", 0, "laying again by the global method"});
-  PipelineResult::Relay relay;
-  relay.tried = relay.globally = true;
-  relay.firstReached = reached(first);
-  relay.firstNodesOfFour = nodesOfFourCut(first);
-  relay.firstCoverageGap = first.coverageGap;
+  PipelineResult::Relay relay = relayAfter(first);
+  relay.globally = true;
   std::optional<PipelineResult> laid =
       layAgain(global, first, relay, "laid again by the global method", "Method 2's rows are", progress, cancel);
   if (!laid) return first;
@@ -2490,9 +2501,7 @@ PipelineResult coveredGlobally(PipelineResult first, const PipelineParams& param
     << second.coverageGap << " and " << nodesOfFourCut(second) << ": the " << (better ? "global method's" : "rows")
     << " kept";
   kept.triangulation.notes.push_back(s.str());
-  kept.relay = relay;
-  kept.surfaceReused = first.surfaceReused;
-  addTimings(kept, first, second);
+  keepAfterRelay(kept, first, second, relay);
   return std::move(kept);
 }
 
@@ -2513,12 +2522,9 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   again.anisotropy = std::max(params.anisotropy, kRelayAnisotropy);
   again.curvatureFloor = std::min(params.curvatureFloor, kRelayFloor);
   if (progress) progress({"triangulate", 0, "laying again, following the Dupin metric further"});
-  PipelineResult::Relay relay;
-  relay.tried = true;
+  PipelineResult::Relay relay = relayAfter(first);
   relay.anisotropy = again.anisotropy;
   relay.curvatureFloor = again.curvatureFloor;
-  relay.firstReached = reached(first);
-  relay.firstNodesOfFour = nodesOfFourCut(first);
   std::optional<PipelineResult> laid =
       layAgain(again, first, relay, "laid again following the Dupin metric further", "the first lay is", progress, cancel);
   if (!laid) {
@@ -2545,9 +2551,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
       << ": the " << (better ? "second" : "first") << " is kept";
     kept.triangulation.notes.push_back(s.str());
   }
-  kept.relay = relay;
-  kept.surfaceReused = first.surfaceReused;  // the second lay reuses the surface the first read
-  addTimings(kept, first, second);
+  keepAfterRelay(kept, first, second, relay);
   if (progress) progress({"done", 1, "done"});
   return std::move(kept);
 }

@@ -67,8 +67,9 @@ Options of `phex run`:
                             four faces at over 5 % of its faces, lay it again following the Dupin metric
                             further (anisotropy 2.5, curvature floor 0.05) and keep the better (not on noisy
                             uploads); an upload under auto whose Method 2 rows leave a point of it over a
-                            mean panel edge from any panel (or reach no P-Hex mesh): tile it by the global
-                            method and keep that where it reaches one covering the upload more closely
+                            mean panel edge from any panel, cut faces, or reach no P-Hex mesh: tile it by
+                            the global method and keep that where it reaches one covering the upload more
+                            closely or, both within a panel edge, with fewer nodes of four faces from cuts
                             (report: relay) (default on)
   --fold-flips on|off       global: where the dual solved with folds allowed has faces crossing themselves
                             (at most 8 % of them), merge each one's vertex with its neighbour along the

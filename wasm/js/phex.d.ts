@@ -275,7 +275,8 @@ export interface Result {
    * it reached a P-Hex mesh, the nodes of four faces its cuts made (two per interior face cut, one per boundary
    * panel) and its coverage gap (mean panel edges). Either method 'global''s lay again following the Dupin metric
    * further (the anisotropy and curvature floor it followed), or (`globally`) an upload under 'auto' that Method 2's
-   * rows left partly bare (coverage gap over 1) or unsolved, tiled by the global method. `tried` false: one lay. */
+   * rows left partly bare (coverage gap over 1), brought to a P-Hex mesh only by cutting faces, or left unsolved,
+   * tiled by the global method. `tried` false: one lay. */
   relay: { tried: boolean; kept: boolean; globally: boolean; anisotropy: number; curvatureFloor: number; firstReached: boolean; firstNodesOfFour: number; firstCoverageGap: number };
   /** An upload far from the origin (more than ten times its size: site coordinates) is computed about the
    * centre of its box, this point, where its coordinates keep their digits; every mesh and note here is in the
@@ -424,9 +425,10 @@ export interface RunParams {
    * Method 'global': where the lay does not reach a P-Hex mesh (not converged, faces crossing themselves or nodes
    * far off), or its cuts make nodes of four faces at over 5 % of its faces, it is laid again following the Dupin
    * metric further (anisotropy 2.5, curvature floor 0.05) and the better kept ('on', default; not on noisy
-   * uploads). Under 'auto', an upload whose Method 2 rows leave a point of it over a mean panel edge from any panel
-   * (or reach no P-Hex mesh) is tiled by the global method, kept where it reaches one covering the upload more
-   * closely. `result.relay` says what ran. 'off': the first lay stands.
+   * uploads). Under 'auto', an upload whose Method 2 rows leave a point of it over a mean panel edge from any panel,
+   * cut faces, or reach no P-Hex mesh is tiled by the global method, kept where it reaches one covering the upload
+   * more closely or, both within a panel edge, with fewer nodes of four faces from cuts. `result.relay` says what
+   * ran. 'off': the first lay stands.
    */
   relay?: 'on' | 'off';
   /**
