@@ -10,6 +10,7 @@
 #include <iterator>
 #include <limits>
 #include <mutex>
+#include <numeric>
 #include <optional>
 #include <sstream>
 #include <unordered_map>
@@ -844,6 +845,10 @@ struct SolvedDual {
 // it is solved again.
 constexpr int kResolveRings = 2;
 constexpr double kResolveShare = 0.5;
+// The stars a round's repair mends: those within this many edges of a vertex its changes touched (the rest were
+// mended, or resisted, the round before; mending them all again each round cost 0.3 s a round at 100k faces). Over
+// the 40 + 48 runs of the sweeps the same faces cut within a few (149 -> 145) and the same hexagons.
+constexpr int kRepairRings = 2;
 
 // The Dupin dual `hex` of a triangulation, solved (folds allowed) as above from `before`, the dual of the
 // triangulation the round before, and `solved`, that dual as solved then; nullopt where the region is most of the
@@ -984,22 +989,47 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     TriMesh& T = t.mesh;
     const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
     auto key = [nv](int a, int b) { return std::uint64_t(std::min(a, b)) * std::uint64_t(nv) + std::uint64_t(std::max(a, b)); };
-    std::vector<int> triangles(nv, 0);
-    // Each vertex's triangles (`closed`: an interior vertex), and its neighbours, sorted.
-    const VertexRings rings = vertexRings(T);
-    const std::vector<std::vector<int>>& star = rings.triangles;
-    std::vector<std::vector<int>> ring(nv), incident(nv);
+    // Each vertex's triangles in order (`incident`, also its star), its neighbours sorted (`ring`), flattened; an
+    // interior vertex is one whose fan closes: as many neighbours as triangles (the triangulation is a manifold
+    // here: the dual was just built from its fans). (Lists of lists and vertexRings' fans took 0.09 s a round at
+    // 100k faces.)
+    struct Span {
+      const int *first, *last;
+      const int* begin() const { return first; }
+      const int* end() const { return last; }
+      std::size_t size() const { return static_cast<std::size_t>(last - first); }
+      bool empty() const { return first == last; }
+      int operator[](std::size_t i) const { return first[i]; }
+    };
+    std::vector<int> triangleStart(nv + 1, 0), triangleList(3 * static_cast<std::size_t>(nf));
+    std::vector<int> neighbourStart(nv + 1, 0), neighbourList(6 * static_cast<std::size_t>(nf));
     for (int f = 0; f < nf; ++f)
-      for (int k = 0; k < 3; ++k) {
-        const int a = T.F(f, k), b = T.F(f, (k + 1) % 3);
-        ++triangles[a];
-        ring[a].push_back(b), ring[b].push_back(a);
-        incident[a].push_back(f);
+      for (int k = 0; k < 3; ++k) ++triangleStart[T.F(f, k) + 1];
+    for (int v = 0; v < nv; ++v) triangleStart[v + 1] += triangleStart[v];
+    {
+      std::vector<int> fill(triangleStart.begin(), triangleStart.end() - 1), fillNeighbours(nv);
+      for (int f = 0; f < nf; ++f)
+        for (int k = 0; k < 3; ++k) triangleList[fill[T.F(f, k)]++] = f;
+      for (int v = 0; v < nv; ++v) fillNeighbours[v] = 2 * triangleStart[v];
+      for (int f = 0; f < nf; ++f)
+        for (int k = 0; k < 3; ++k) {
+          const int a = T.F(f, k), b = T.F(f, (k + 1) % 3);
+          neighbourList[fillNeighbours[a]++] = b, neighbourList[fillNeighbours[b]++] = a;
+        }
+      for (int v = 0, at = 0; v < nv; ++v) {  // each vertex's 2 x triangles entries sorted, unique, compacted
+        const auto b = neighbourList.begin() + 2 * triangleStart[v], e = neighbourList.begin() + 2 * triangleStart[v + 1];
+        std::sort(b, e);
+        const auto u = std::unique(b, e);
+        neighbourStart[v] = at;
+        at = static_cast<int>(std::copy(b, u, neighbourList.begin() + at) - neighbourList.begin());
+        neighbourStart[v + 1] = at;
       }
-    for (std::vector<int>& r : ring) {
-      std::sort(r.begin(), r.end());
-      r.erase(std::unique(r.begin(), r.end()), r.end());
     }
+    std::vector<int> triangles(nv);
+    for (int v = 0; v < nv; ++v) triangles[v] = triangleStart[v + 1] - triangleStart[v];
+    auto incident = [&](int v) { return Span{triangleList.data() + triangleStart[v], triangleList.data() + triangleStart[v + 1]}; };
+    auto star = incident;
+    auto ringOf = [&](int v) { return Span{neighbourList.data() + neighbourStart[v], neighbourList.data() + neighbourStart[v + 1]}; };
     // The triangles as the round found them, and the edges its flips made (true) or took away (false): an edge's
     // triangles are those it had then (a flip's own are used up, so no other change reads them), and whether an
     // edge exists, as then but for the flips. (A hash map of every edge's triangles took 0.13 s a round at 100k.)
@@ -1007,18 +1037,18 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     std::unordered_map<std::uint64_t, bool> flippedEdges;
     auto edgeTriangles = [&](int a, int b) {
       std::vector<int> both;  // in order, as `incident` lists them
-      for (int f : incident[a])
+      for (int f : incident(a))
         if (F0(f, 0) == b || F0(f, 1) == b || F0(f, 2) == b) both.push_back(f);
       return both;
     };
     auto edgeExists = [&](int a, int b) {
       const auto it = flippedEdges.find(key(a, b));
-      return it != flippedEdges.end() ? it->second : std::binary_search(ring[a].begin(), ring[a].end(), b);
+      return it != flippedEdges.end() ? it->second : std::binary_search(ringOf(a).begin(), ringOf(a).end(), b);
     };
-    auto interior = [&](int v) { return rings.closed[v] && !star[v].empty(); };
+    auto interior = [&](int v) { return triangleStart[v + 1] > triangleStart[v] && neighbourStart[v + 1] - neighbourStart[v] == triangleStart[v + 1] - triangleStart[v]; };
     auto point = [&](int v) { return Vec3(T.V.row(v).transpose()); };
     auto centroid = [&](int f) { return Vec3((point(T.F(f, 0)) + point(T.F(f, 1)) + point(T.F(f, 2))) / 3); };
-    std::vector<char> usedTriangle(nf, 0), usedVertex(nv, 0), dropped(nf, 0);
+    std::vector<char> usedTriangle(nf, 0), usedVertex(nv, 0), dropped(nf, 0), flipped(nv, 0);
     std::vector<int> mergeInto(nv, -1);
     // v merged into its neighbour along the flatter principal direction, where that keeps the mesh sound.
     auto collapse = [&](int v) {
@@ -1027,30 +1057,30 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
       const Vec3 flat = (std::abs(g.k1) <= std::abs(g.k2) ? g.d1 : g.d2).normalized();
       int w = -1;
       double along = -1;
-      std::vector<double> cosines(ring[v].size());
-      for (std::size_t i = 0; i < ring[v].size(); ++i) {
-        Vec3 e = point(ring[v][i]) - point(v);
+      std::vector<double> cosines(ringOf(v).size());
+      for (std::size_t i = 0; i < ringOf(v).size(); ++i) {
+        Vec3 e = point(ringOf(v)[i]) - point(v);
         e -= e.dot(g.normal) * g.normal;
         cosines[i] = e.norm() > 0 ? std::abs(e.dot(flat)) / e.norm() : 0.0;
-        if (cosines[i] > along) along = cosines[i], w = ring[v][i];
+        if (cosines[i] > along) along = cosines[i], w = ringOf(v)[i];
       }
       // Of the neighbours about as well along it (both ways along a row), the one whose merge leaves the fewest
       // irregular vertices: the merged vertex has the two's neighbours less four, the two common ones one fewer.
       auto commonWith = [&](int u) {
         std::vector<int> c;
-        std::set_intersection(ring[v].begin(), ring[v].end(), ring[u].begin(), ring[u].end(), std::back_inserter(c));
+        std::set_intersection(ringOf(v).begin(), ringOf(v).end(), ringOf(u).begin(), ringOf(u).end(), std::back_inserter(c));
         return c;
       };
       auto irregularity = [&](int u) {
         const std::vector<int> c = commonWith(u);
-        int cost = std::abs(static_cast<int>(ring[v].size() + ring[u].size()) - 10);
-        for (int x : c) cost += std::abs(static_cast<int>(ring[x].size()) - 7) - std::abs(static_cast<int>(ring[x].size()) - 6);
+        int cost = std::abs(static_cast<int>(ringOf(v).size() + ringOf(u).size()) - 10);
+        for (int x : c) cost += std::abs(static_cast<int>(ringOf(x).size()) - 7) - std::abs(static_cast<int>(ringOf(x).size()) - 6);
         return cost;
       };
       if (w >= 0) {
         int bestCost = irregularity(w);
-        for (std::size_t i = 0; i < ring[v].size(); ++i) {
-          const int u = ring[v][i];
+        for (std::size_t i = 0; i < ringOf(v).size(); ++i) {
+          const int u = ringOf(v)[i];
           if (u == w || cosines[i] < along - kMergeAlongSlack || usedVertex[u] || !interior(u)) continue;
           const int cost = irregularity(u);
           if (cost < bestCost) bestCost = cost, w = u;
@@ -1058,19 +1088,19 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
       }
       if (w < 0 || usedVertex[w] || !interior(w)) return false;
       const std::vector<int> common = commonWith(w);
-      if (common.size() != 2 || ring[common[0]].size() < 5 || ring[common[1]].size() < 5 ||
-          ring[v].size() + ring[w].size() - 4 > kMergedMost)
+      if (common.size() != 2 || ringOf(common[0]).size() < 5 || ringOf(common[1]).size() < 5 ||
+          ringOf(v).size() + ringOf(w).size() - 4 > kMergedMost)
         return false;
-      for (int f : star[v])
+      for (int f : star(v))
         if (usedTriangle[f]) return false;
-      for (int f : star[w])
+      for (int f : star(w))
         if (usedTriangle[f]) return false;
       const LocalGeometry middle = surface.closestPoint(0.5 * (point(v) + point(w)));
       const Vec3& merged = middle.point;
       // No triangle left around the merged vertex turns over (seen along the normal there).
       const Vec3& normal = middle.normal;
       for (int x : {v, w})
-        for (int f : star[x]) {
+        for (int f : star(x)) {
           Vec3 c[3];
           bool both = false;
           for (int k = 0; k < 3; ++k) {
@@ -1082,10 +1112,10 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
         }
       for (int x : {v, w}) {
         usedVertex[x] = 1;
-        for (int u : ring[x]) usedVertex[u] = 1;
-        for (int f : star[x]) usedTriangle[f] = 1;
+        for (int u : ringOf(x)) usedVertex[u] = 1;
+        for (int f : star(x)) usedTriangle[f] = 1;
       }
-      for (int f : star[v])
+      for (int f : star(v))
         for (int k = 0; k < 3; ++k)
           if (T.F(f, k) == w) dropped[f] = 1;
       T.V.row(w) = merged.transpose();
@@ -1133,14 +1163,19 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
       T.F.row(t1) << c, x, o;
       T.F.row(t2) << o, y, c;
       usedTriangle[t1] = usedTriangle[t2] = 1;
+      flipped[x] = flipped[y] = flipped[c] = flipped[o] = 1;
       flippedEdges[key(c, o)] = true;
       flippedEdges[key(x, y)] = false;
       --triangles[x], --triangles[y], ++triangles[c], ++triangles[o];
       ++done.flips;
     }
+    // The vertices a change touched (a merge's two and their neighbours, a flip's four corners), by their ids
+    // after the merges.
+    std::vector<int> id(nv);
+    std::iota(id.begin(), id.end(), 0);
     // The merged vertices' ids given up, the triangles on the collapsed edges dropped.
     if (std::any_of(mergeInto.begin(), mergeInto.end(), [](int m) { return m >= 0; })) {
-      std::vector<int> id(nv, -1);
+      id.assign(nv, -1);
       int count = 0;
       for (int v = 0; v < nv; ++v)
         if (mergeInto[v] < 0) id[v] = count++;
@@ -1158,10 +1193,23 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
       }
       T.V = std::move(V);
       T.F = std::move(F);
+      for (int v = 0; v < nv; ++v)
+        if (mergeInto[v] >= 0) id[v] = id[mergeInto[v]];
+    }
+    // The stars to mend: those within kRepairRings of a change. The others were mended (or resisted) the round
+    // before and are as they were: the mesh elsewhere is the same, bit for bit.
+    std::vector<char> near(static_cast<std::size_t>(T.V.rows()), 0);
+    for (int v = 0; v < nv; ++v)
+      if (usedVertex[v] || flipped[v]) near[id[v]] = 1;
+    for (int ring = 0; ring < kRepairRings; ++ring) {
+      std::vector<char> grown = near;
+      for (int f = 0; f < T.F.rows(); ++f)
+        if (near[T.F(f, 0)] || near[T.F(f, 1)] || near[T.F(f, 2)]) grown[T.F(f, 0)] = grown[T.F(f, 1)] = grown[T.F(f, 2)] = 1;
+      near.swap(grown);
     }
     // Its note is said once, with the changes' (the caller's).
     const std::size_t notes = t.notes.size();
-    const RepairResult r = repairStars(t, surface, kRepairSweeps, &geometry);
+    const RepairResult r = repairStars(t, surface, kRepairSweeps, &geometry, &near);
     t.notes.resize(notes);
     done.repair.moved += r.moved, done.repair.flips += r.flips;
   }

@@ -113,9 +113,11 @@ struct RepairResult {
   int flips = 0;                            // edges flipped where moves alone left a star invalid
 };
 inline constexpr int kRepairSweeps = 12;
-// `cache`: the vertices' geometry as vertexGeometry found it before (see GeometryCache), or null.
+// `cache`: the vertices' geometry as vertexGeometry found it before (see GeometryCache), or null. `only` (where
+// given, one entry per vertex): the stars to mend are those it marks (the rest, repaired before and unchanged since,
+// count as they are: moves and flips next to the marked ones still judge them).
 RepairResult repairStars(Triangulation& triangulation, const Surface& surface, int maxSweeps = kRepairSweeps,
-                         GeometryCache* cache = nullptr);
+                         GeometryCache* cache = nullptr, const std::vector<char>* only = nullptr);
 
 // Drops the slivers along an open boundary: a triangle on a boundary edge whose third corner is an interior
 // vertex no higher than `ratio` times that edge above it (where the last row ran along the boundary, or
