@@ -5,6 +5,7 @@
 #include <random>
 
 #include "phex/error.hpp"
+#include "phex/global_triangulation.hpp"
 #include "phex/laying.hpp"
 #include "phex/mesh_surface.hpp"
 #include "phex/pipeline.hpp"
@@ -195,4 +196,66 @@ TEST_CASE("repair: stars its moves bring to be judged (across a parabolic curve)
   CHECK(r.invalidAfter == after);  // the repair's count is the check's
   CHECK(after <= before / 10);
   CHECK(r.invalidBefore >= before);
+}
+
+TEST_CASE("repair: the stars marked alone are mended, on the part of the mesh around them, as the whole mesh's repair") {
+  // The rounds against folds mend only the stars near their changes (repairStars with `only`), on the part of the
+  // triangulation within a few edges of them. Marking every star must give the whole mesh's repair bit for bit (the
+  // part is then the whole, numbered alike, its points' kinds by the same mean edge); marking some must mend those
+  // and leave the mesh as it was farther than the part reaches.
+  const ParametricSurfacePtr s = makeSurface("freeform");
+  GlobalOptions o;
+  o.faces = 1500;
+  const Triangulation laid = globalTriangulation(*s, o);
+  const TriangulationCheck before = checkTriangulation(laid, *s);
+  REQUIRE(before.invalidStars.size() >= 5);
+  const int nv = static_cast<int>(laid.mesh.V.rows());
+
+  Triangulation whole = laid, marked = laid;
+  const RepairResult all = repairStars(whole, *s);
+  const std::vector<char> every(nv, 1);
+  const RepairResult allMarked = repairStars(marked, *s, kRepairSweeps, nullptr, &every);
+  CHECK(allMarked.invalidBefore == all.invalidBefore);
+  CHECK(allMarked.invalidAfter == all.invalidAfter);
+  CHECK(allMarked.moved == all.moved);
+  CHECK(marked.mesh.V == whole.mesh.V);
+  CHECK(marked.mesh.F == whole.mesh.F);
+
+  // Half the invalid stars marked (those left of the middle), and the vertices within two edges of them.
+  std::vector<char> some(nv, 0);
+  int markedInvalid = 0;
+  for (int v : before.invalidStars)
+    if (laid.mesh.V(v, 0) < 0) some[v] = 1, ++markedInvalid;
+  REQUIRE(markedInvalid >= 2);
+  std::vector<int> rings(nv, -1);  // edges from the nearest marked vertex, up to 6
+  for (int v = 0; v < nv; ++v)
+    if (some[v]) rings[v] = 0;
+  for (int r = 0; r < 6; ++r)
+    for (int f = 0; f < laid.mesh.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int a = laid.mesh.F(f, k), b = laid.mesh.F(f, (k + 1) % 3);
+        if (rings[a] == r && rings[b] < 0) rings[b] = r + 1;
+        if (rings[b] == r && rings[a] < 0) rings[a] = r + 1;
+      }
+  Triangulation part = laid;
+  const RepairResult local = repairStars(part, *s, kRepairSweeps, nullptr, &some);
+  INFO("marked invalid " << markedInvalid << ": " << local.invalidBefore << " -> " << local.invalidAfter << ", moved "
+                         << local.moved << ", " << local.flips << " flips");
+  CHECK(local.invalidBefore == markedInvalid);
+  CHECK(local.invalidAfter < markedInvalid);
+  CHECK(local.moved > 0);
+  int changedFar = 0;
+  for (int v = 0; v < nv; ++v)
+    if (rings[v] < 0 || rings[v] > 3) changedFar += part.mesh.V.row(v) != laid.mesh.V.row(v);
+  CHECK(changedFar == 0);
+  for (int f = 0; f < laid.mesh.F.rows(); ++f) {
+    if (part.mesh.F.row(f) == laid.mesh.F.row(f)) continue;
+    for (int k = 0; k < 3; ++k) CHECK(rings[laid.mesh.F(f, k)] >= 0);  // a flip only next to a marked star
+  }
+  // The invalid stars left unmarked are as they were.
+  const TriangulationCheck after = checkTriangulation(part, *s);
+  int unmarkedBefore = 0, unmarkedAfter = 0;
+  for (int v : before.invalidStars) unmarkedBefore += rings[v] < 0 || rings[v] > 4;
+  for (int v : after.invalidStars) unmarkedAfter += rings[v] < 0 || rings[v] > 4;
+  CHECK(unmarkedAfter == unmarkedBefore);
 }
