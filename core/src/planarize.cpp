@@ -648,6 +648,7 @@ namespace {
 struct SurfaceFit {
   bool applied = false;
   double before = 0.0, after = 0.0;  // max vertex distance to the surface, absolute
+  bool held = false;  // dropped before any solve: a node as far off as the farthest has all its faces frozen
 };
 
 // A triangle's normal scaled by twice its area (corners in the face's order).
@@ -766,6 +767,7 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
     for (int k = start[v]; k < start[v + 1] && held; ++k) held = frozen[faces[k]] != 0;
     if (held) {
       fit.after = fit.before;
+      fit.held = true;
       return fit;
     }
   }
@@ -1174,12 +1176,18 @@ void fitPlanarMeshToSurface(PolyMesh& mesh, const PlanarizeOptions& options, Pla
     // (Always so, a hemisphere mesh at 1000 faces went 0.19 % -> 0.41 %; the goal is met there.)
     // Still past it: with the nodes' planes taken from their polygons alone (FitMode::trianglesFree), the
     // folded faces' neighbours frozen at the second refreeze, then at the first.
+    // A fit held at once (its farthest node's faces all frozen) is held in the modes that differ from it only by
+    // cornersAtOnce, which acts after its first solve: those are not run (the bench's upload at 100k faces: two of
+    // three retries, 0.3 s, for the same mesh).
+    bool held[2] = {fit.held, false};  // by trianglesFree
     for (const FitMode retry : {FitMode{true, false}, FitMode{false, true}, FitMode{true, true}}) {
       const double reached = fit.applied ? fit.after : fit.before;
       if (!(diagonal > 0 && reached > kSurfaceDistanceGoal * diagonal)) break;
+      if (held[retry.trianglesFree]) continue;
       const Points kept = mesh.V;
       mesh.V = planar;
       const SurfaceFit again = fitPlanesToSurface(mesh, *options.surface, cancel, retry);
+      held[retry.trianglesFree] = held[retry.trianglesFree] || again.held;
       if (again.applied && again.after < reached) fit = again;
       else mesh.V = kept;
     }
