@@ -203,7 +203,7 @@ test("relay reaches the core: a shallow dome the first lay leaves unconverged is
 
 test("foldFlips reaches the core: on the torus the notes say how many vertices were merged, and fewer faces are cut", async () => {
   const r = await phex.run({ surface: 'torus', faces: 3000, method: 'global' });
-  assert.ok(r.triangulation.notes.some((n) => /[1-9][0-9]* vertices were merged with their neighbour along the flatter principal direction/.test(n)), r.triangulation.notes.join('\n'));
+  assert.ok(r.triangulation.notes.some((n) => /[1-9][0-9]* merged with their neighbour along it/.test(n)), r.triangulation.notes.join('\n'));
   assert.ok(r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
   const plain = await phex.run({ surface: 'torus', faces: 3000, method: 'global', foldFlips: 'off' });
   assert.ok(!plain.triangulation.notes.some((n) => /faces crossing themselves \(each such face would otherwise be cut/.test(n)), 'none when off');
