@@ -1062,7 +1062,7 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     auto interior = [&](int v) { return triangleStart[v + 1] > triangleStart[v] && neighbourStart[v + 1] - neighbourStart[v] == triangleStart[v + 1] - triangleStart[v]; };
     auto point = [&](int v) { return Vec3(T.V.row(v).transpose()); };
     auto centroid = [&](int f) { return Vec3((point(T.F(f, 0)) + point(T.F(f, 1)) + point(T.F(f, 2))) / 3); };
-    std::vector<char> usedTriangle(nf, 0), usedVertex(nv, 0), dropped(nf, 0), flipped(nv, 0);
+    std::vector<char> usedTriangle(nf, 0), usedVertex(nv, 0), dropped(nf, 0), touched(nv, 0);
     std::vector<int> mergeInto(nv, -1);
     // v merged into its neighbour along the flatter principal direction, where that keeps the mesh sound.
     auto collapse = [&](int v) {
@@ -1166,7 +1166,7 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
       usedVertex[v] = usedVertex[w] = 1;
       for (int u : ringOf(w)) usedVertex[u] = 1;
       for (int f : star(w)) usedTriangle[f] = 1;
-      flipped[v] = flipped[w] = 1;  // (touched: their stars are mended below)
+      touched[v] = touched[w] = 1;
       ++done.aligned;
       return true;
     };
@@ -1211,14 +1211,14 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
       T.F.row(t1) << c, x, o;
       T.F.row(t2) << o, y, c;
       usedTriangle[t1] = usedTriangle[t2] = 1;
-      flipped[x] = flipped[y] = flipped[c] = flipped[o] = 1;
+      touched[x] = touched[y] = touched[c] = touched[o] = 1;
       flippedEdges[key(c, o)] = true;
       flippedEdges[key(x, y)] = false;
       --triangles[x], --triangles[y], ++triangles[c], ++triangles[o];
       ++done.flips;
     }
-    // The vertices a change touched (a merge's two and their neighbours, a flip's four corners), by their ids
-    // after the merges.
+    // The vertices a change touched (a merge's two and their neighbours, a flip's four corners, an alignment's two
+    // and the moved one's neighbours), by their ids after the merges.
     std::vector<int> id(nv);
     std::iota(id.begin(), id.end(), 0);
     // The merged vertices' ids given up, the triangles on the collapsed edges dropped.
@@ -1248,7 +1248,7 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     // before and are as they were: the mesh elsewhere is the same, bit for bit.
     std::vector<char> near(static_cast<std::size_t>(T.V.rows()), 0);
     for (int v = 0; v < nv; ++v)
-      if (usedVertex[v] || flipped[v]) near[id[v]] = 1;
+      if (usedVertex[v] || touched[v]) near[id[v]] = 1;
     for (int ring = 0; ring < kRepairRings; ++ring) {
       std::vector<char> grown = near;
       for (int f = 0; f < T.F.rows(); ++f)
