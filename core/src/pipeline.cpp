@@ -1064,20 +1064,32 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     auto centroid = [&](int f) { return Vec3((point(T.F(f, 0)) + point(T.F(f, 1)) + point(T.F(f, 2))) / 3); };
     std::vector<char> usedTriangle(nf, 0), usedVertex(nv, 0), dropped(nf, 0), touched(nv, 0);
     std::vector<int> mergeInto(nv, -1);
-    // v merged into its neighbour along the flatter principal direction, where that keeps the mesh sound.
-    auto collapse = [&](int v) {
-      if (done.collapses >= budget || usedVertex[v] || !interior(v)) return false;
-      const LocalGeometry g = surface.closestPoint(point(v));
-      const Vec3 flat = (std::abs(g.k1) <= std::abs(g.k2) ? g.d1 : g.d2).normalized();
-      int w = -1;
+    // The flatter principal direction at v, and how well each of v's neighbours lies along it (|cosine| of the
+    // edge's tangential part); `best` the first of the best.
+    struct AlongFlat {
+      Vec3 flat;
+      std::vector<double> cosines;  // in the order of ringOf(v)
+      int best = -1;
       double along = -1;
-      std::vector<double> cosines(ringOf(v).size());
+    };
+    auto alongFlat = [&](int v) {
+      const LocalGeometry g = surface.closestPoint(point(v));
+      AlongFlat a{(std::abs(g.k1) <= std::abs(g.k2) ? g.d1 : g.d2).normalized(), std::vector<double>(ringOf(v).size())};
       for (std::size_t i = 0; i < ringOf(v).size(); ++i) {
         Vec3 e = point(ringOf(v)[i]) - point(v);
         e -= e.dot(g.normal) * g.normal;
-        cosines[i] = e.norm() > 0 ? std::abs(e.dot(flat)) / e.norm() : 0.0;
-        if (cosines[i] > along) along = cosines[i], w = ringOf(v)[i];
+        a.cosines[i] = e.norm() > 0 ? std::abs(e.dot(a.flat)) / e.norm() : 0.0;
+        if (a.cosines[i] > a.along) a.along = a.cosines[i], a.best = ringOf(v)[i];
       }
+      return a;
+    };
+    // v merged into its neighbour along the flatter principal direction, where that keeps the mesh sound.
+    auto collapse = [&](int v) {
+      if (done.collapses >= budget || usedVertex[v] || !interior(v)) return false;
+      const AlongFlat a = alongFlat(v);
+      const std::vector<double>& cosines = a.cosines;
+      int w = a.best;
+      const double along = a.along;
       // Of the neighbours about as well along it (both ways along a row), the one whose merge leaves the fewest
       // irregular vertices: the merged vertex has the two's neighbours less four, the two common ones one fewer.
       auto commonWith = [&](int u) {
@@ -1140,18 +1152,10 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     // v's neighbour nearest the flatter direction moved onto the line through v along it (kAlignMost, kAligned).
     auto align = [&](int v) {
       if (usedVertex[v] || !interior(v)) return false;
-      const LocalGeometry g = surface.closestPoint(point(v));
-      const Vec3 flat = (std::abs(g.k1) <= std::abs(g.k2) ? g.d1 : g.d2).normalized();
-      int w = -1;
-      double along = -1;
-      for (int u : ringOf(v)) {
-        Vec3 e = point(u) - point(v);
-        e -= e.dot(g.normal) * g.normal;
-        const double c = e.norm() > 0 ? std::abs(e.dot(flat)) / e.norm() : 0.0;
-        if (c > along) along = c, w = u;
-      }
+      const AlongFlat a = alongFlat(v);
+      const int w = a.best;
       if (w < 0 || usedVertex[w] || !interior(w)) return false;
-      const Vec3 e = point(w) - point(v), target = point(v) + e.dot(flat) * flat;
+      const Vec3 e = point(w) - point(v), target = point(v) + e.dot(a.flat) * a.flat;
       const double off = (target - point(w)).norm();
       if (off > kAlignMost * e.norm() || off < kAligned * e.norm()) return false;
       for (int f : star(w))
@@ -1249,12 +1253,7 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     std::vector<char> near(static_cast<std::size_t>(T.V.rows()), 0);
     for (int v = 0; v < nv; ++v)
       if (usedVertex[v] || touched[v]) near[id[v]] = 1;
-    for (int ring = 0; ring < kRepairRings; ++ring) {
-      std::vector<char> grown = near;
-      for (int f = 0; f < T.F.rows(); ++f)
-        if (near[T.F(f, 0)] || near[T.F(f, 1)] || near[T.F(f, 2)]) grown[T.F(f, 0)] = grown[T.F(f, 1)] = grown[T.F(f, 2)] = 1;
-      near.swap(grown);
-    }
+    markWithinEdges(T, near, kRepairRings);
     // Its note is said once, with the changes' (the caller's).
     const std::size_t notes = t.notes.size();
     const RepairResult r = repairStars(t, surface, kRepairSweeps, &geometry, &near);

@@ -656,12 +656,7 @@ RepairResult repairAround(Triangulation& triangulation, const Surface& surface, 
   TriMesh& T = triangulation.mesh;
   const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
   std::vector<char> near(only);
-  for (int ring = 0; ring < kAroundRings; ++ring) {
-    std::vector<char> grown = near;
-    for (int f = 0; f < nf; ++f)
-      if (near[T.F(f, 0)] || near[T.F(f, 1)] || near[T.F(f, 2)]) grown[T.F(f, 0)] = grown[T.F(f, 1)] = grown[T.F(f, 2)] = 1;
-    near.swap(grown);
-  }
+  markWithinEdges(T, near, kAroundRings);
   std::vector<int> faces, id(nv, -1), vertices;
   for (int f = 0; f < nf; ++f)
     if (near[T.F(f, 0)] || near[T.F(f, 1)] || near[T.F(f, 2)]) {

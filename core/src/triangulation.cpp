@@ -227,6 +227,16 @@ std::vector<char> judgedStars(const TriMesh& T, const VertexRings& rings, const 
   return judged;
 }
 
+void markWithinEdges(const TriMesh& mesh, std::vector<char>& marked, int edges) {
+  const Triangles& F = mesh.F;
+  for (int ring = 0; ring < edges; ++ring) {
+    std::vector<char> grown = marked;
+    for (int f = 0; f < F.rows(); ++f)
+      if (marked[F(f, 0)] || marked[F(f, 1)] || marked[F(f, 2)]) grown[F(f, 0)] = grown[F(f, 1)] = grown[F(f, 2)] = 1;
+    marked.swap(grown);
+  }
+}
+
 TriangulationCheck checkTriangulation(const Triangulation& t, const Surface& surface) {
   TriangulationCheck c;
   const TriMesh& T = t.mesh;

@@ -113,6 +113,10 @@ struct RepairResult {
   int flips = 0;                            // edges flipped where moves alone left a star invalid
 };
 inline constexpr int kRepairSweeps = 12;
+// `marked` (one entry per vertex of `mesh`) grown by `edges` rings: every corner of a triangle with a marked corner
+// marked, `edges` times.
+void markWithinEdges(const TriMesh& mesh, std::vector<char>& marked, int edges);
+
 // `cache`: the vertices' geometry as vertexGeometry found it before (see GeometryCache), or null. `only` (where
 // given, one entry per vertex): the stars to mend are those it marks (the rest, repaired before and unchanged since,
 // count as they are: moves and flips next to the marked ones still judge them).

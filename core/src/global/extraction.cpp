@@ -441,24 +441,13 @@ class Extractor {
   // of the site and those two boundary sites closes it, where they are not joined already. Returns how many.
   int closeNotches(TriMesh& T, const std::vector<int>& siteOf) const {
     const int nv = static_cast<int>(T.V.rows()), nf = static_cast<int>(T.F.rows());
-    // The half-edges by their start, each row sorted (a hash set of them took 5 ms at 10k faces).
-    std::vector<int> outStart(nv + 1, 0), ends(3 * static_cast<std::size_t>(nf));
-    for (int f = 0; f < nf; ++f)
-      for (int k = 0; k < 3; ++k) ++outStart[T.F(f, k) + 1];
-    for (int v = 0; v < nv; ++v) outStart[v + 1] += outStart[v];
-    {
-      std::vector<int> fill(outStart.begin(), outStart.end() - 1);
-      for (int f = 0; f < nf; ++f)
-        for (int k = 0; k < 3; ++k) ends[fill[T.F(f, k)]++] = T.F(f, (k + 1) % 3);
-    }
-    for (int v = 0; v < nv; ++v) std::sort(ends.begin() + outStart[v], ends.begin() + outStart[v + 1]);
-    auto halfEdge = [&](int a, int b) { return std::binary_search(ends.begin() + outStart[a], ends.begin() + outStart[a + 1], b); };
+    const HalfEdges halfEdges(T.F, nv);
     // Per vertex, its boundary half-edges in and out (-1: none; -2: more than one).
     std::vector<int> in(nv, -1), out(nv, -1);
     for (int f = 0; f < nf; ++f)
       for (int k = 0; k < 3; ++k) {
         const int a = T.F(f, k), b = T.F(f, (k + 1) % 3);
-        if (halfEdge(b, a)) continue;
+        if (halfEdges.has(b, a)) continue;
         out[a] = out[a] == -1 ? b : -2;
         in[b] = in[b] == -1 ? a : -2;
       }
@@ -468,7 +457,7 @@ class Extractor {
       const int a = in[v], b = out[v];
       if (a < 0 || b < 0 || a == b || sites_[siteOf[v]].loop >= 0) continue;
       if (sites_[siteOf[a]].loop < 0 || sites_[siteOf[b]].loop < 0 || used[a] || used[b] || used[v]) continue;
-      if (halfEdge(a, b) || halfEdge(b, a)) continue;
+      if (halfEdges.has(a, b) || halfEdges.has(b, a)) continue;
       added.push_back(Eigen::Vector3i(v, a, b));  // half-edges v -> a and b -> v pair the boundary's a -> v, v -> b
       used[a] = used[b] = used[v] = 1;
     }

@@ -284,6 +284,25 @@ double zigzagWindow(const FieldMesh& m, int coarse, double edge) {
   return std::max(kTangentWindow * edge, std::min(kToothWindow * median, kLongestWindow * edge));
 }
 
+}  // namespace
+
+HalfEdges::HalfEdges(const Triangles& F, int vertices) : start_(vertices + 1, 0), ends_(3 * static_cast<std::size_t>(F.rows())) {
+  const int nf = static_cast<int>(F.rows());
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) ++start_[F(f, c) + 1];
+  for (int v = 0; v < vertices; ++v) start_[v + 1] += start_[v];
+  std::vector<int> fill(start_.begin(), start_.end() - 1);
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) ends_[fill[F(f, c)]++] = F(f, (c + 1) % 3);
+  for (int v = 0; v < vertices; ++v) std::sort(ends_.begin() + start_[v], ends_.begin() + start_[v + 1]);
+}
+
+bool HalfEdges::has(int a, int b) const {
+  return std::binary_search(ends_.begin() + start_[a], ends_.begin() + start_[a + 1], b);
+}
+
+namespace {
+
 void buildTopology(FieldMesh& m, double fieldEdge, int coarse) {
   const int nv = m.vertexCount(), nf = static_cast<int>(m.F.rows());
   // Adjacency.
@@ -308,21 +327,12 @@ void buildTopology(FieldMesh& m, double fieldEdge, int coarse) {
     m.start[v + 1] = static_cast<int>(m.adjacent.size());
   }
   // Boundary: half-edges a -> b with no b -> a. Their next one starts at b (one per boundary vertex: manifold).
-  // The half-edges by their start, each row sorted (a hash map of them took 4 % of a run at 10k faces).
-  std::vector<int> outStart(nv + 1, 0), out(3 * static_cast<std::size_t>(nf));
-  for (int f = 0; f < nf; ++f)
-    for (int c = 0; c < 3; ++c) ++outStart[m.F(f, c) + 1];
-  for (int v = 0; v < nv; ++v) outStart[v + 1] += outStart[v];
-  fill.assign(outStart.begin(), outStart.end() - 1);
-  for (int f = 0; f < nf; ++f)
-    for (int c = 0; c < 3; ++c) out[fill[m.F(f, c)]++] = m.F(f, (c + 1) % 3);
-  for (int v = 0; v < nv; ++v) std::sort(out.begin() + outStart[v], out.begin() + outStart[v + 1]);
-  auto halfEdge = [&](int a, int b) { return std::binary_search(out.begin() + outStart[a], out.begin() + outStart[a + 1], b); };
+  const HalfEdges halfEdges(m.F, nv);
   std::vector<int> next(nv, -1);
   for (int f = 0; f < nf; ++f)
     for (int c = 0; c < 3; ++c) {
       const int a = m.F(f, c), b = m.F(f, (c + 1) % 3);
-      if (!halfEdge(b, a)) next[a] = b;
+      if (!halfEdges.has(b, a)) next[a] = b;
     }
   m.boundary.assign(nv, 0);
   m.loops.clear();

@@ -67,6 +67,17 @@ inline Vec3 transport(const Vec3& q, const Frame& a, const Frame& b, const Vec3&
 }
 
 // The mesh the fields live on: the surface sampled finely (a few vertices per cell), each vertex with its frame.
+// A triangle mesh's half-edges by their start, each row sorted: whether a -> b is one, by binary search (a hash
+// set of them took 4 % of a run at 10k faces in the field mesh's topology, 5 ms in the extraction's notch closing).
+class HalfEdges {
+ public:
+  HalfEdges(const Triangles& F, int vertices);
+  bool has(int a, int b) const;
+
+ private:
+  std::vector<int> start_, ends_;
+};
+
 struct FieldMesh {
   Points V;                         // #V by 3 points on the surface
   Triangles F;                      // #F by 3, CCW seen from the normal side
