@@ -218,6 +218,21 @@ std::shared_ptr<const MeshSurface> uploadedSurface(const MeshInput& in, bool& re
 // lay runs on the upload refined into a smooth surface through its vertices (MeshSurface::refined), k x k
 // per triangle for edges of about kRefinedEdge of a cell.
 constexpr double kCoarseUpload = 1.5, kRefinedEdge = 0.5;
+// The finer refinements refinementFor weighs against the global method's field mesh, and how far (a ratio either way)
+// the field mesh's edge may come out of the two splits from its own before they are weighed.
+constexpr int kRefineChoices = 3;
+constexpr double kFieldEdgeRange = 1.25;
+
+// The median of a mesh's edge lengths (each interior edge counted twice, as the field mesh counts them).
+double medianEdge(const TriMesh& mesh) {
+  std::vector<double> lengths;
+  lengths.reserve(3 * static_cast<std::size_t>(mesh.F.rows()));
+  for (int f = 0; f < mesh.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) lengths.push_back((mesh.V.row(mesh.F(f, c)) - mesh.V.row(mesh.F(f, (c + 1) % 3))).norm());
+  if (lengths.empty()) return 0.0;
+  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+  return lengths[lengths.size() / 2];
+}
 
 // The edge of the equilateral triangle of a mesh's mean triangle area: its triangles' size. The mean edge
 // would count long thin triangles by their long edges, which a vault's grid runs along its straight
@@ -233,7 +248,20 @@ double triangleSize(const TriMesh& mesh) {
 int refinementFor(const MeshSurface& mesh, double size, double cell) {
   if (mesh.planar() || mesh.creases().sharp() || !(cell > 0) || !(size > kCoarseUpload * cell)) return 1;
   const double most = std::floor(std::sqrt(double(MeshSurface::kMaxRefinedTriangles) / double(mesh.mesh().F.rows())));
-  return static_cast<int>(std::clamp(std::ceil(size / (kRefinedEdge * cell)), 1.0, std::max(1.0, most)));
+  const int smooth = static_cast<int>(std::clamp(std::ceil(size / (kRefinedEdge * cell)), 1.0, std::max(1.0, most)));
+  // The global method's field mesh splits the refined triangles again, j x j (globalFieldSplit), so its edge is the
+  // upload's over k j: where the refined edges fell just past a whole number of field-mesh edges, j took one more
+  // and the field mesh came out up to 2.5 times as fine as it needs (the bench's upload at 60k faces: refined 5 x
+  // 5, then 2 x 2, 1.0M field-mesh vertices, 17 per lattice point against 7 at 50k and 100k; slower than at 100k).
+  // Where the field mesh of `smooth` has edges within kFieldEdgeRange of its own, it stands; else of it and up to
+  // kRefineChoices finer refinements, the one whose field mesh's edge comes nearest (by ratio), the first of those.
+  const double median = medianEdge(mesh.mesh()), edge = globalFieldEdge(cell);
+  auto away = [&](int k) { return std::abs(std::log(median / (k * globalFieldSplit(median / k, cell)) / edge)); };
+  if (away(smooth) <= std::log(kFieldEdgeRange)) return smooth;
+  int best = smooth;
+  for (int k = smooth + 1; k <= std::min(static_cast<int>(most), smooth + kRefineChoices); ++k)
+    if (away(k) < away(best)) best = k;
+  return best;
 }
 
 // The cached upload `coarse` refined k x k (kept with it for the next run).

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <catch.hpp>
 #include <cmath>
@@ -352,6 +353,64 @@ TEST_CASE("global triangulation: a needle triangle is tiled from a field mesh as
   INFO(note);
   CHECK(vertices < 10000);
   CHECK(countEdges(t.mesh).boundary > 0);
+}
+
+// An upload far finer than the cell (a scan, a marching-cubes mesh) is thinned before its field mesh is laid: about
+// as many vertices as field-mesh edges of that length need, the upload's topology, boundary loops and orientation
+// kept, every vertex on the surface.
+TEST_CASE("global field: an upload far finer than the cell is thinned to the field mesh's density, its topology and boundary kept") {
+  for (const std::string name : {"freeform", "torus"}) {
+    CAPTURE(name);
+    const auto analytic = makeSurface(name);
+    const double diagonal = analytic->bounds().diagonal().norm();
+    const TriMesh upload = latticeTriangulation(*analytic, diagonal / 150).mesh;
+    const MeshSurface surface(upload, name);
+    const double edge = diagonal / 30;
+    const global::FieldMesh m = global::fieldMesh(surface, edge, 1.5, 0.25, nullptr);
+    REQUIRE(m.thinnedFrom == upload.V.rows());
+    CHECK(m.thinnedTo < upload.V.rows() / 10);
+    const double wanted = 2 * upload.area() / (std::sqrt(3.0) * edge * edge);
+    INFO(m.vertexCount() << " field-mesh vertices, " << wanted << " wanted, from " << upload.V.rows());
+    CHECK(m.vertexCount() < 2 * wanted);
+    CHECK(m.vertexCount() > 0.5 * wanted);
+    TriMesh field;
+    field.V = m.V;
+    field.F = m.F;
+    CHECK(test::eulerCharacteristic(field) == test::eulerCharacteristic(upload));
+    CHECK(countEdges(field).bad == 0);
+    CHECK(m.loops.size() == surface.boundaryLoops().size());
+    // The boundary loops are the upload's: each of its boundary vertices is one of the field mesh's.
+    std::set<std::array<double, 3>> points;
+    for (int v = 0; v < m.vertexCount(); ++v) points.insert({m.V(v, 0), m.V(v, 1), m.V(v, 2)});
+    for (const std::vector<int>& loop : surface.boundaryLoops())
+      for (int v : loop) CHECK(points.count({upload.V(v, 0), upload.V(v, 1), upload.V(v, 2)}) == 1);
+    // On the surface, and no triangle turned over against the surface's normal.
+    double off = 0;
+    int turned = 0;
+    for (int v = 0; v < m.vertexCount(); ++v) off = std::max(off, (surface.closestPoint(m.point(v)).point - m.point(v)).norm());
+    for (int f = 0; f < m.F.rows(); ++f) {
+      const Vec3 a = m.point(m.F(f, 0)), b = m.point(m.F(f, 1)), c = m.point(m.F(f, 2));
+      turned += (b - a).cross(c - a).dot(surface.closestPoint((a + b + c) / 3).normal) <= 0;
+    }
+    CHECK(off <= 1e-9 * diagonal);
+    CHECK(turned == 0);
+  }
+}
+
+// The generated genus 3 (marching tetrahedra, 59k vertices, its long edges bisected) at 1000 faces laid its field on 65
+// field-mesh vertices a lattice point and stalled off planar (4e-2, with a gap of 4 panel edges); thinned, it reaches
+// a P-Hex mesh.
+TEST_CASE("pipeline: the generated genus 3 at 1000 faces, thinned for its field, reaches a P-Hex mesh") {
+  const PipelineParams p = globalUpload(test::closedSurfaceOfGenus(3, 60), "genus3.obj", 1000);
+  const PipelineResult r = runPipeline(p);
+  bool thinned = false;
+  for (const std::string& note : r.triangulation.notes) thinned |= note.find("thinned to") != std::string::npos;
+  CHECK(thinned);
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+  CHECK(r.coverageGap <= 1);
+  CHECK(std::abs(double(r.hex.faceCount()) / 1000 - 1) <= 0.1);
 }
 
 // The cell's integrable scale on a large coarse mesh (over kDirectScale vertices) is solved iteratively,

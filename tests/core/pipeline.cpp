@@ -1053,7 +1053,13 @@ TEST_CASE("pipeline: a coarse upload laid finer than its triangles is laid on a 
   const std::string notes = allNotes(r.triangulation);
   INFO(notes);
   CHECK(notes.find("the uploaded mesh is coarse for this lay") != std::string::npos);
-  CHECK(notes.find("split 14 x 14") != std::string::npos);  // triangles of 0.279 (triangleSize), a cell of 0.0407
+  // Triangles of 0.279 (triangleSize), a cell of 0.0407: split 14 x 14 for edges of half a cell at most, or up to
+  // three times finer where the global method's field mesh then splits them to nearer its own edge (refinementFor).
+  const std::size_t split = notes.find(" triangles split ");
+  REQUIRE(split != std::string::npos);
+  const int k = std::stoi(notes.substr(split + 17));
+  CHECK(k >= 14);
+  CHECK(k <= 17);
   CHECK(r.solve.converged);
   CHECK(r.metrics.planarityMax <= 1e-9);
   CHECK(r.metrics.selfIntersectingCount == 0);

@@ -56,4 +56,12 @@ void validate(const GlobalOptions& options);
 Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& options, const ProgressFn& progress = {},
                                   const CancelFlag* cancel = nullptr);
 
+// How many times the global method's field mesh splits each edge of an uploaded mesh whose median edge is `median`
+// (its triangles k x k, before the longest left are bisected), tiled at `cell`: its first try's field-mesh edge,
+// cell / kSamplesPerCell, reached or a little undershot. The pipeline refines a coarse upload so that this split
+// lands near that edge (refinementFor): the two splits multiply.
+int globalFieldSplit(double median, double cell);
+// The global method's first field-mesh edge at `cell`.
+double globalFieldEdge(double cell);
+
 }  // namespace phex

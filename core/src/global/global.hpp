@@ -97,6 +97,7 @@ struct FieldMesh {
   std::vector<std::pair<int, Vec3>> where;
   int components = 0;
   double edgeMean = 0;
+  int thinnedFrom = 0, thinnedTo = 0;  // an upload thinned first (thinned()): its vertices, and those left; else 0
   int vertexCount() const { return static_cast<int>(V.rows()); }
   Vec3 point(int v) const { return V.row(v).transpose(); }
 };
@@ -146,6 +147,10 @@ void sweepLevel(const Level& L, int sweeps, const Update& update) {
 }
 // Sets the cell's factor on level 0 and, area-weighted, on the coarser levels.
 void setScale(std::vector<Level>& levels, const std::vector<double>& scale);
+
+// The uniform split k of a mesh of median edge `median` into field-mesh edges of `edge` (at least 1; fieldMesh caps
+// it further by the surface's area).
+int fieldSplit(double median, double edge);
 
 // The 6-fold field: per level (level 0 first) and vertex, a unit tangent direction in the Dupin frame (the five others are it
 // turned by multiples of 60 degrees). Smoothed coarse to fine by Gauss-Seidel sweeps over colours.

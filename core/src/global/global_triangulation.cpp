@@ -91,6 +91,9 @@ double cellForCount(const FieldMesh& m, const std::vector<double>& scale, int fa
 
 }  // namespace
 
+double globalFieldEdge(double cell) { return cell / kSamplesPerCell; }
+int globalFieldSplit(double median, double cell) { return fieldSplit(median, globalFieldEdge(cell)); }
+
 Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& options, const ProgressFn& progress,
                                   const CancelFlag* cancel) {
   validate(options);
@@ -172,8 +175,10 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       std::ostringstream s;
       s.precision(4);
       s << "global field: cell " << bestCell << ", " << t.singularities.size() << " singular points (" << plus
-        << " sixths of a turn positive, " << minus << " negative) laid on " << m.vertexCount()
-        << " field-mesh vertices; " << flips << " edges flipped towards valence 6";
+        << " sixths of a turn positive, " << minus << " negative) laid on " << m.vertexCount() << " field-mesh vertices";
+      if (m.thinnedFrom > 0)
+        s << " (the upload's " << m.thinnedFrom << " vertices, finer than the field needs, thinned to " << m.thinnedTo << ")";
+      s << "; " << flips << " edges flipped towards valence 6";
       t.notes.push_back(s.str());
       for (std::string& note : best.notes) t.notes.push_back(std::move(note));
       return t;
