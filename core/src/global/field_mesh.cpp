@@ -26,10 +26,10 @@ constexpr double kAreaSplitMargin = 4.0;
 // kCollapseTurn degrees, flipping towards valence 6, and relaxing. A field mesh far finer than the cell lost the
 // lattice hexagons and time: the bumps sampled as 500k triangles at 1000 and 3000 faces had 254 and 85 field-mesh
 // vertices a lattice point (7 from an analytic surface) and 84.4 and 89.7 % hexagons against 91.3 and 93.1 % from
-// 20k triangles, in 4.2 and 4.7 s; thinned, 86.8 and 94.1 % in 2.2 and 2.7 s. The closed surfaces of genus 2 and 3
+// 20k triangles, in 4.6 and 4.8 s; thinned, 89.6 and 93.4 % in 1.6 and 2.0 s. The closed surfaces of genus 2 and 3
 // generated for the tests (marching tetrahedra, 49k and 59k vertices, their long edges bisected: 23-65 a point) at
-// 1000-5000 faces: hexagons 71.9 / 84.4 / 89.6 -> 92.5 / 90.2 / 91.9 % and 69.2 / 78.1 / 82.9 -> 79.4 / 82.7 /
-// 90.5 %, the genus 3 at 1000 faces now planar (it stalled at 4e-2). Thinned at 1.5 times the density: 1.7 points
+// 1000-5000 faces: hexagons 71.9 / 84.4 / 89.6 -> 85.4 / 89.4 / 92.5 % and 69.2 / 78.1 / 82.9 -> 88.3 / 83.6 /
+// 89.2 %, the genus 3 at 1000 faces now planar (it stalled at 4e-2). Thinned at 1.5 times the density: 1.7 points
 // fewer hexagons; from twice the density on: the bubble shell at 1000 faces (2.2 times) lost 1.6 points.
 constexpr double kThinAbove = 2.5, kThinDensity = 1.0, kCollapseBelow = 0.9, kCollapsedMost = 1.3, kCollapseTurn = 30.0;
 constexpr int kThinRounds = 3, kCollapseBuckets = 64;
