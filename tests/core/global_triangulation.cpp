@@ -398,13 +398,13 @@ TEST_CASE("global field: an upload far finer than the cell is thinned to the fie
 }
 
 // The generated genus 3 (marching tetrahedra, 59k vertices, its long edges bisected) at 1000 faces laid its field on 65
-// field-mesh vertices a lattice point and stalled off planar (4e-2, with a gap of 4 panel edges); thinned, it reaches
-// a P-Hex mesh.
+// field-mesh vertices a lattice point and stalled off planar (4e-2, with a gap of 4 panel edges); remeshed to the
+// field's edge (7 a point), it reaches a P-Hex mesh.
 TEST_CASE("pipeline: the generated genus 3 at 1000 faces, thinned for its field, reaches a P-Hex mesh") {
   const PipelineParams p = globalUpload(test::closedSurfaceOfGenus(3, 60), "genus3.obj", 1000);
   const PipelineResult r = runPipeline(p);
   bool thinned = false;
-  for (const std::string& note : r.triangulation.notes) thinned |= note.find("thinned to") != std::string::npos;
+  for (const std::string& note : r.triangulation.notes) thinned |= note.find("remeshed to") != std::string::npos;
   CHECK(thinned);
   CHECK(r.solve.converged);
   CHECK(r.metrics.planarityMax <= 1e-9);

@@ -21,18 +21,20 @@ constexpr double kCoarseSplit = 3.0;
 constexpr double kLongEdge = 1.3;
 constexpr double kAreaSplitMargin = 4.0;
 // An upload whose split (and bisected) mesh has over kThinAbove times the vertices a mesh of field-mesh edges has is
-// thinned first to about kThinDensity times that (thinned()): kThinRounds rounds of collapsing edges under
-// kCollapseBelow field-mesh edges while the edges made stay under kCollapsedMost and no triangle turns by more than
-// kCollapseTurn degrees, flipping towards valence 6, and relaxing. A field mesh far finer than the cell lost the
-// lattice hexagons and time: the bumps sampled as 500k triangles at 1000 and 3000 faces had 254 and 85 field-mesh
-// vertices a lattice point (7 from an analytic surface) and 84.4 and 89.7 % hexagons against 91.3 and 93.1 % from
-// 20k triangles, in 4.6 and 4.8 s; thinned, 89.6 and 93.4 % in 1.6 and 2.0 s. The closed surfaces of genus 2 and 3
-// generated for the tests (marching tetrahedra, 49k and 59k vertices, their long edges bisected: 23-65 a point) at
-// 1000-5000 faces: hexagons 71.9 / 84.4 / 89.6 -> 85.4 / 89.4 / 92.5 % and 69.2 / 78.1 / 82.9 -> 88.3 / 83.6 /
-// 89.2 %, the genus 3 at 1000 faces now planar (it stalled at 4e-2). Thinned at 1.5 times the density: 1.7 points
-// fewer hexagons; from twice the density on: the bubble shell at 1000 faces (2.2 times) lost 1.6 points.
+// thinned first to about kThinDensity times that (thinned()): kThinRounds rounds of splitting interior edges over
+// kSplitAbove field-mesh edges, collapsing edges under kCollapseBelow while the edges made stay under kCollapsedMost
+// and no triangle turns by more than kCollapseTurn degrees, flipping towards valence 6, and relaxing. A field mesh
+// far finer than the cell lost the lattice hexagons and time: the bumps sampled as 500k triangles at 1000 and 3000
+// faces had 254 and 85 field-mesh vertices a lattice point (7 from an analytic surface) and 84.4 and 89.7 % hexagons
+// against 91.3 and 93.1 % from 20k triangles, in 4.7 and 4.8 s; thinned, 88.3 and 92.7 % in 1.4 and 1.8 s. The closed
+// surfaces of genus 1-3 generated for the tests (marching tetrahedra, 37-59k vertices, long edges among short
+// ones) at 3000 and 5000 faces: hexagons 93.3 / 94.1, 84.4 / 89.6 and 78.1 / 82.9 % -> 97.1 / 95.4, 90.6 / 92.4 and
+// 90.4 / 92.2 %; the genus 3 at 1000 faces now planar (it stalled at 4e-2). Thinned at 1.5 times the density: 1.7
+// points fewer hexagons; from twice the density on: the bubble shell at 1000 faces (2.2 times) lost 1.6 points.
 constexpr double kThinAbove = 2.5, kThinDensity = 1.0, kCollapseBelow = 0.9, kCollapsedMost = 1.3, kCollapseTurn = 30.0;
 constexpr int kThinRounds = 3, kCollapseBuckets = 64;
+constexpr double kSplitAbove = 1.3, kSplitMost = 2.0;
+constexpr int kSplitPasses = 20;
 // The half-width of the window a zigzag boundary's direction is taken over (zigzagWindow): at least
 // kTangentWindow field-mesh edges (about a cell) and kToothWindow of the coarse mesh's boundary edges (a zigzag's
 // teeth are two long: a tent as wide as a tooth cancels them), but at most kLongestWindow field-mesh edges (about 3
@@ -146,21 +148,21 @@ TriMesh split(const TriMesh& mesh, int k, std::vector<std::pair<int, Vec3>>& whe
   return out;
 }
 
-// An upload finer than the field mesh needs, thinned to about the field mesh's edge (isotropic remeshing by collapses,
-// flips and relaxation, kThinRounds times): edges under kCollapseBelow field-mesh edges collapse, shortest first, the
-// two ends merging at the surface's point nearest their midpoint (an end on the boundary stays where it is; two on
-// the boundary do not merge, so the boundary loops are the upload's), while the edges made stay under
-// kCollapsedMost, no triangle around turns by more than kCollapseTurn and the two ends share exactly two neighbours
-// (the link condition: the surface's topology stays); then edges flip where that brings valences nearer 6 (4 on the
-// boundary), and interior vertices move to their neighbours' centroid within the tangent plane, onto the surface,
-// where no triangle turns by more than kCollapseTurn. `kept` gets, per vertex left, its id in the upload where it did
-// not move, else -1.
+// An upload finer or more uneven than the field mesh needs, remeshed to about the field mesh's edge (isotropic
+// remeshing, kThinRounds rounds): interior edges over kSplitAbove field-mesh edges split at their midpoint on the
+// surface where they are the longest of both their triangles; edges under kCollapseBelow collapse, shortest first, the
+// two ends merging at their midpoint (an end on the boundary stays where it is; two on the boundary do not merge, so
+// the boundary loops are the upload's), while the edges made stay under kCollapsedMost, no triangle around turns by
+// more than kCollapseTurn and the two ends share exactly two neighbours (the link condition: the surface's topology
+// stays); then edges flip where that brings valences nearer 6 (4 on the boundary), and interior vertices move to
+// their neighbours' centroid within the tangent plane, onto the surface, where no triangle turns by more than
+// kCollapseTurn. `kept` gets, per vertex left, its id in the upload where it did not move, else -1.
 TriMesh thinned(const Surface& surface, const TriMesh& mesh, double edge, std::vector<int>& kept, const CancelFlag* cancel) {
-  const int nv = static_cast<int>(mesh.V.rows()), nf = static_cast<int>(mesh.F.rows());
+  int nv = static_cast<int>(mesh.V.rows()), nf = static_cast<int>(mesh.F.rows());  // grow with the splits
   std::vector<std::array<int, 3>> tris(nf);
   std::vector<char> alive(nf, 1), removed(nv, 0), boundary(nv, 0), moved(nv, 0);
   std::vector<int> version(nv, 0);
-  std::vector<Vec3> points(nv), normals(nv);
+  std::vector<Vec3> points(nv);
   for (int v = 0; v < nv; ++v) points[v] = mesh.V.row(v).transpose();
   std::vector<std::vector<int>> at(nv);  // each vertex's triangles (alive or not: filtered when read)
   for (int f = 0; f < nf; ++f)
@@ -267,9 +269,62 @@ TriMesh thinned(const Surface& surface, const TriMesh& mesh, double edge, std::v
     }
   };
 
+  // Interior edges over kSplitAbove field-mesh edges split at their midpoint, on the surface (the upload's long edges
+  // between short ones: a marching-tetrahedra mesh's), until none is left; boundary edges stay as they are.
+  // An edge is split where it is the longest of both its triangles (longest-edge bisection: the angles stay bounded
+  // and the splits end), in passes until none is left, and not past kSplitMost times the vertices edges of `edge`
+  // would have.
+  const double area = mesh.area();
+  const int splitMost = static_cast<int>(std::min(1e9, kSplitMost * 2 * area / (std::sqrt(3.0) * edge * edge)));
+  auto longest = [&](int f, int a, int b) {
+    const double ab = (points[a] - points[b]).norm();
+    for (int c = 0; c < 3; ++c)
+      if ((points[tris[f][c]] - points[tris[f][(c + 1) % 3]]).norm() > ab) return false;
+    return true;
+  };
+  auto splitLong = [&]() {
+    const double above = kSplitAbove * edge;
+    int splits = 0;
+    for (int pass = 0, done = -1; pass < kSplitPasses && done != 0; ++pass) {
+      done = 0;
+      for (int f = 0, count = nf; f < count; ++f) {
+        if ((f & 0xffff) == 0) checkCancel(cancel);
+        for (int c = 0; c < 3 && alive[f]; ++c) {
+          const int a = tris[f][c], b = tris[f][(c + 1) % 3], x = tris[f][(c + 2) % 3];
+          if (!((points[a] - points[b]).norm() > above) || splits >= splitMost || !longest(f, a, b)) continue;
+          int g = -1, y = -1;
+          for (int h : at[b]) {
+            if (!alive[h] || h == f) continue;
+            for (int k = 0; k < 3; ++k)
+              if (tris[h][k] == b && tris[h][(k + 1) % 3] == a) g = h, y = tris[h][(k + 2) % 3];
+          }
+          if (g < 0 || !longest(g, a, b)) continue;
+          const Vec3 p = surface.closestPoint(0.5 * (points[a] + points[b])).point;
+          if (!p.allFinite()) continue;
+          const int m = nv++;
+          points.push_back(p), at.emplace_back();
+          removed.push_back(0), boundary.push_back(0), moved.push_back(1), version.push_back(0);
+          // (a, b, x) -> (a, m, x) + (m, b, x); (b, a, y) -> (b, m, y) + (m, a, y).
+          const int f2 = nf++, g2 = nf++;
+          tris[f] = {a, m, x};
+          tris[g] = {b, m, y};
+          tris.push_back({m, b, x}), tris.push_back({m, a, y});
+          alive.push_back(1), alive.push_back(1);
+          at[b].erase(std::remove(at[b].begin(), at[b].end(), f), at[b].end());
+          at[a].erase(std::remove(at[a].begin(), at[a].end(), g), at[a].end());
+          at[b].push_back(f2), at[x].push_back(f2), at[a].push_back(g2), at[y].push_back(g2);
+          at[m] = {f, f2, g, g2};
+          ++version[a], ++version[b];
+          ++splits, ++done;
+          break;  // f changed: its edges in the next pass
+        }
+      }
+    }
+  };
   // Valences (neighbour counts) of the vertices left.
   std::vector<int> valence(nv, 0);
   auto countValences = [&]() {
+    valence.resize(nv);
     for (int v = 0; v < nv; ++v) {
       if (removed[v]) continue;
       neighbours(v, ringU);
@@ -314,6 +369,7 @@ TriMesh thinned(const Surface& surface, const TriMesh& mesh, double edge, std::v
   // surface; found over threads from the places before, then taken in order where no triangle turns.
   std::vector<Vec3> target(nv);
   auto relax = [&]() {
+    target.resize(nv);
     for (int v = 0; v < nv; ++v) {
       target[v] = points[v];
       if (removed[v] || boundary[v]) continue;
@@ -341,6 +397,7 @@ TriMesh thinned(const Surface& surface, const TriMesh& mesh, double edge, std::v
     }
   };
   for (int round = 0; round < kThinRounds; ++round) {
+    splitLong();
     collapseShort();
     checkCancel(cancel);
     flipTowardsSix();
@@ -718,7 +775,7 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, doub
     TriMesh fine, thin;
     sampled(mesh->mesh(), false, fine);
     // Where that leaves many more vertices than the field needs (an upload finer than the cell, or one of long and
-    // short edges mixed, whose long ones the bisection splits: a marching-tetrahedra mesh), the upload is thinned to
+    // short edges mixed, whose long ones the bisection splits: a marching-tetrahedra mesh), the upload is remeshed to
     // about kThinDensity times what the field needs (thinned: `kept` its vertices' ids in the upload) and split again.
     const double wanted = 2 * mesh->mesh().area() / (std::sqrt(3.0) * edge * edge);  // vertices of edge `edge`
     std::vector<int> kept;

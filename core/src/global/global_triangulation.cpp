@@ -177,7 +177,8 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       s << "global field: cell " << bestCell << ", " << t.singularities.size() << " singular points (" << plus
         << " sixths of a turn positive, " << minus << " negative) laid on " << m.vertexCount() << " field-mesh vertices";
       if (m.thinnedFrom > 0)
-        s << " (the upload's " << m.thinnedFrom << " vertices, finer than the field needs, thinned to " << m.thinnedTo << ")";
+        s << " (the upload's " << m.thinnedFrom << " vertices, finer or more uneven than the field needs, remeshed to "
+          << m.thinnedTo << " at its edge)";
       s << "; " << flips << " edges flipped towards valence 6";
       t.notes.push_back(s.str());
       for (std::string& note : best.notes) t.notes.push_back(std::move(note));
