@@ -1047,7 +1047,7 @@ TEST_CASE("pipeline: a coarse upload laid finer than its triangles is laid on a 
   const auto dome = [](double x, double y) { return 0.5 - 0.25 * (x * x + y * y); };
   PipelineParams p;
   p.mesh = heightFieldUpload("sketch", 8, dome);
-  p.relay = false;  // auto's rows as they are (they leave a corner 2 panel edges bare: with relay, tiled globally)
+  p.relay = false;  // auto's rows as they are (at 2000 faces they leave a corner bare: with relay, tiled globally)
   p.faces = 3000;
   const PipelineResult r = runPipeline(p);
   const std::string notes = allNotes(r.triangulation);
