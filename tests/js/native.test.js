@@ -88,3 +88,21 @@ test('wasm and native CLI give the same upload by the global method', { skip: no
     rmSync(dir, { recursive: true, force: true });
   }
 });
+
+// A fine upload is remeshed to the field's edge before the global method lays its field (field_mesh.cpp, thinned):
+// collapses in buckets of length, flips and a relaxation onto the surface, the same in both builds.
+test('wasm and native CLI give the same fine upload, remeshed for the global method', { skip: noCli }, async () => {
+  const dir = mkdtempSync(join(tmpdir(), 'phex-native-fine-'));
+  try {
+    const mesh = join(dir, 'fine.obj');
+    execFileSync(cli, ['triangulate', '--surface', 'hyperbolic-paraboloid', '--method', 'lattice', '--faces', '20000', '--quiet', '--out', mesh]);
+    const bytes = new Uint8Array(readFileSync(mesh));
+    const phex = await createPHex();
+    const r = await phex.run({ mesh: bytes, meshFormat: 'obj', faces: 500, method: 'global' });
+    phex.dispose();
+    assert.ok(r.triangulation.notes.some((note) => /remeshed to \d+ at its edge/.test(note)), r.triangulation.notes.join('\n'));
+    await assertSameRun(['--mesh', mesh, '--faces', '500', '--method', 'global'], { mesh: bytes, meshFormat: 'obj', faces: 500, method: 'global' });
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
