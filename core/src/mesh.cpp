@@ -1,3 +1,5 @@
+#include <vector>
+#include <algorithm>
 #include "phex/mesh.hpp"
 
 #include <cstdio>
@@ -17,6 +19,16 @@ double TriMesh::meanEdgeLength() const {
   for (int f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) sum += (V.row(F(f, k)) - V.row(F(f, (k + 1) % 3))).norm();
   return F.rows() ? sum / (3.0 * F.rows()) : 0.0;
+}
+
+double TriMesh::medianEdgeLength() const {
+  std::vector<double> lengths;
+  lengths.reserve(3 * static_cast<std::size_t>(F.rows()));
+  for (int f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) lengths.push_back((V.row(F(f, k)) - V.row(F(f, (k + 1) % 3))).norm());
+  if (lengths.empty()) return 0.0;
+  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+  return lengths[lengths.size() / 2];
 }
 
 double TriMesh::area() const {

@@ -223,17 +223,6 @@ constexpr double kCoarseUpload = 1.5, kRefinedEdge = 0.5;
 constexpr int kRefineChoices = 3;
 constexpr double kFieldEdgeRange = 1.25;
 
-// The median of a mesh's edge lengths (each interior edge counted twice, as the field mesh counts them).
-double medianEdge(const TriMesh& mesh) {
-  std::vector<double> lengths;
-  lengths.reserve(3 * static_cast<std::size_t>(mesh.F.rows()));
-  for (int f = 0; f < mesh.F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) lengths.push_back((mesh.V.row(mesh.F(f, c)) - mesh.V.row(mesh.F(f, (c + 1) % 3))).norm());
-  if (lengths.empty()) return 0.0;
-  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
-  return lengths[lengths.size() / 2];
-}
-
 // The edge of the equilateral triangle of a mesh's mean triangle area: its triangles' size. The mean edge
 // would count long thin triangles by their long edges, which a vault's grid runs along its straight
 // direction (0.2 x 0.02 triangles on a 20 m vault were refined 4 x 4 for nothing: three times the time).
@@ -255,7 +244,7 @@ int refinementFor(const MeshSurface& mesh, double size, double cell) {
   // 5, then 2 x 2, 1.0M field-mesh vertices, 17 per lattice point against 7 at 50k and 100k; slower than at 100k).
   // Where the field mesh of `smooth` has edges within kFieldEdgeRange of its own, it stands; else of it and up to
   // kRefineChoices finer refinements, the one whose field mesh's edge comes nearest (by ratio), the first of those.
-  const double median = medianEdge(mesh.mesh()), edge = globalFieldEdge(cell);
+  const double median = mesh.mesh().medianEdgeLength(), edge = globalFieldEdge(cell);
   auto away = [&](int k) { return std::abs(std::log(median / (k * globalFieldSplit(median / k, cell)) / edge)); };
   if (away(smooth) <= std::log(kFieldEdgeRange)) return smooth;
   int best = smooth;

@@ -58,16 +58,22 @@ test('wasm and native CLI give the same torus', { skip: noCli }, async () => {
 // An uploaded mesh goes through the curvature estimate (jet fits), closest-point queries and the start choice's
 // trial lays, where a last-bit difference between the platforms' libm or Eigen's summation order would
 // change the laying.
-test('wasm and native CLI tile the same uploaded mesh alike', { skip: noCli }, async () => {
+// An analytic surface's lattice at `faces`, written by the native CLI as an OBJ upload in a scratch folder: `use`
+// gets its path and bytes; the folder goes afterwards.
+async function withLatticeUpload(surface, faces, use) {
   const dir = mkdtempSync(join(tmpdir(), 'phex-native-mesh-'));
   try {
-    const mesh = join(dir, 'roof.obj');
-    execFileSync(cli, ['triangulate', '--surface', 'wave-roof', '--method', 'lattice', '--faces', '4000', '--quiet', '--out', mesh]);
-    const bytes = new Uint8Array(readFileSync(mesh));
-    await assertSameRun(['--mesh', mesh, '--faces', '1000'], { mesh: bytes, meshFormat: 'obj', faces: 1000 });
+    const mesh = join(dir, `${surface}.obj`);
+    execFileSync(cli, ['triangulate', '--surface', surface, '--method', 'lattice', '--faces', String(faces), '--quiet', '--out', mesh]);
+    await use(mesh, new Uint8Array(readFileSync(mesh)));
   } finally {
     rmSync(dir, { recursive: true, force: true });
   }
+}
+
+test('wasm and native CLI tile the same uploaded mesh alike', { skip: noCli }, async () => {
+  await withLatticeUpload('wave-roof', 4000, (mesh, bytes) =>
+    assertSameRun(['--mesh', mesh, '--faces', '1000'], { mesh: bytes, meshFormat: 'obj', faces: 1000 }));
 });
 
 // The global method's field, lattice and extraction round to lattice points and pick among candidates: a last-bit
@@ -92,17 +98,12 @@ test('wasm and native CLI give the same upload by the global method', { skip: no
 // A fine upload is remeshed to the field's edge before the global method lays its field (field_mesh.cpp, thinned):
 // collapses in buckets of length, flips and a relaxation onto the surface, the same in both builds.
 test('wasm and native CLI give the same fine upload, remeshed for the global method', { skip: noCli }, async () => {
-  const dir = mkdtempSync(join(tmpdir(), 'phex-native-fine-'));
-  try {
-    const mesh = join(dir, 'fine.obj');
-    execFileSync(cli, ['triangulate', '--surface', 'hyperbolic-paraboloid', '--method', 'lattice', '--faces', '20000', '--quiet', '--out', mesh]);
-    const bytes = new Uint8Array(readFileSync(mesh));
+  await withLatticeUpload('hyperbolic-paraboloid', 20000, async (mesh, bytes) => {
+    const params = { mesh: bytes, meshFormat: 'obj', faces: 500, method: 'global' };
     const phex = await createPHex();
-    const r = await phex.run({ mesh: bytes, meshFormat: 'obj', faces: 500, method: 'global' });
+    const r = await phex.run(params);
     phex.dispose();
     assert.ok(r.triangulation.notes.some((note) => /remeshed to \d+ at its edge/.test(note)), r.triangulation.notes.join('\n'));
-    await assertSameRun(['--mesh', mesh, '--faces', '500', '--method', 'global'], { mesh: bytes, meshFormat: 'obj', faces: 500, method: 'global' });
-  } finally {
-    rmSync(dir, { recursive: true, force: true });
-  }
+    await assertSameRun(['--mesh', mesh, '--faces', '500', '--method', 'global'], params);
+  });
 });

@@ -16,6 +16,8 @@ struct TriMesh {
   Triangles F;
   // Mean edge length over all triangles (each shared edge counted from both sides).
   double meanEdgeLength() const;
+  // Median edge length over all triangles (each shared edge counted from both sides); 0 without triangles.
+  double medianEdgeLength() const;
   // Sum of the triangles' areas.
   double area() const;
 };

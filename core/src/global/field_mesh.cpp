@@ -21,7 +21,7 @@ constexpr double kCoarseSplit = 3.0;
 constexpr double kLongEdge = 1.3;
 constexpr double kAreaSplitMargin = 4.0;
 // An upload whose split (and bisected) mesh has over kThinAbove times the vertices a mesh of field-mesh edges has is
-// thinned first to about kThinDensity times that (thinned()): kThinRounds rounds of splitting interior edges over
+// remeshed first to that edge (thinned()): kThinRounds rounds of splitting interior edges over
 // kSplitAbove field-mesh edges, collapsing edges under kCollapseBelow while the edges made stay under kCollapsedMost
 // and no triangle turns by more than kCollapseTurn degrees, flipping towards valence 6, and relaxing. A field mesh
 // far finer than the cell lost the lattice hexagons and time: the bumps sampled as 500k triangles at 1000 and 3000
@@ -31,7 +31,7 @@ constexpr double kAreaSplitMargin = 4.0;
 // ones) at 3000 and 5000 faces: hexagons 93.3 / 94.1, 84.4 / 89.6 and 78.1 / 82.9 % -> 97.1 / 95.4, 90.6 / 92.4 and
 // 90.4 / 92.2 %; the genus 3 at 1000 faces now planar (it stalled at 4e-2). Thinned at 1.5 times the density: 1.7
 // points fewer hexagons; from twice the density on: the bubble shell at 1000 faces (2.2 times) lost 1.6 points.
-constexpr double kThinAbove = 2.5, kThinDensity = 1.0, kCollapseBelow = 0.9, kCollapsedMost = 1.3, kCollapseTurn = 30.0;
+constexpr double kThinAbove = 2.5, kCollapseBelow = 0.9, kCollapsedMost = 1.3, kCollapseTurn = 30.0;
 constexpr int kThinRounds = 3, kCollapseBuckets = 64;
 constexpr double kSplitAbove = 1.3, kSplitMost = 2.0;
 constexpr int kSplitPasses = 20;
@@ -148,6 +148,9 @@ TriMesh split(const TriMesh& mesh, int k, std::vector<std::pair<int, Vec3>>& whe
   return out;
 }
 
+// How many vertices a mesh of equilateral triangles of edge `edge` has over `area`.
+double verticesAt(double area, double edge) { return 2 * area / (std::sqrt(3.0) * edge * edge); }
+
 // An upload finer or more uneven than the field mesh needs, remeshed to about the field mesh's edge (isotropic
 // remeshing, kThinRounds rounds): interior edges over kSplitAbove field-mesh edges split at their midpoint on the
 // surface where they are the longest of both their triangles; edges under kCollapseBelow collapse, shortest first, the
@@ -193,6 +196,16 @@ TriMesh thinned(const Surface& surface, const TriMesh& mesh, double edge, std::v
         if (tris[f][c] != v) out.push_back(tris[f][c]);
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
+  };
+  // The other triangle on edge a -> b of triangle f (b -> a in it; -1 on the boundary), `y` its third corner.
+  auto across = [&](int f, int a, int b, int& y) {
+    int g = -1;
+    for (int h : at[b]) {
+      if (!alive[h] || h == f) continue;
+      for (int k = 0; k < 3; ++k)
+        if (tris[h][k] == b && tris[h][(k + 1) % 3] == a) g = h, y = tris[h][(k + 2) % 3];
+    }
+    return g;
   };
   const double below = kCollapseBelow * edge, most = kCollapsedMost * edge;
   // u and v merged into v at p, where the checks above allow.
@@ -249,11 +262,11 @@ TriMesh thinned(const Surface& surface, const TriMesh& mesh, double edge, std::v
           if (a < b && length < below) buckets[bucketOf(length)].push_back({a, b, version[a], version[b]});
         }
     std::vector<std::size_t> next(kCollapseBuckets, 0);  // each bucket's first entry not yet taken
-    for (int at = 0;;) {
-      while (at < kCollapseBuckets && next[at] == buckets[at].size()) ++at;
-      if (at == kCollapseBuckets) break;
+    for (int bucket = 0;;) {
+      while (bucket < kCollapseBuckets && next[bucket] == buckets[bucket].size()) ++bucket;
+      if (bucket == kCollapseBuckets) break;
       if ((++steps & 0xffff) == 0) checkCancel(cancel);
-      const Entry e = buckets[at][next[at]++];
+      const Entry e = buckets[bucket][next[bucket]++];
       if (removed[e.a] || removed[e.b] || version[e.a] != e.va || version[e.b] != e.vb) continue;
       if (!collapse(e.a, e.b)) continue;
       const int into = removed[e.a] ? e.b : e.a;
@@ -263,7 +276,7 @@ TriMesh thinned(const Surface& surface, const TriMesh& mesh, double edge, std::v
         if (length < below) {
           const int a = std::min(w, into), b = std::max(w, into), k = bucketOf(length);
           buckets[k].push_back({a, b, version[a], version[b]});
-          at = std::min(at, k);
+          bucket = std::min(bucket, k);
         }
       }
     }
@@ -274,8 +287,7 @@ TriMesh thinned(const Surface& surface, const TriMesh& mesh, double edge, std::v
   // An edge is split where it is the longest of both its triangles (longest-edge bisection: the angles stay bounded
   // and the splits end), in passes until none is left, and not past kSplitMost times the vertices edges of `edge`
   // would have.
-  const double area = mesh.area();
-  const int splitMost = static_cast<int>(std::min(1e9, kSplitMost * 2 * area / (std::sqrt(3.0) * edge * edge)));
+  const int splitMost = static_cast<int>(std::min(1e9, kSplitMost * verticesAt(mesh.area(), edge)));
   auto longest = [&](int f, int a, int b) {
     const double ab = (points[a] - points[b]).norm();
     for (int c = 0; c < 3; ++c)
@@ -292,12 +304,8 @@ TriMesh thinned(const Surface& surface, const TriMesh& mesh, double edge, std::v
         for (int c = 0; c < 3 && alive[f]; ++c) {
           const int a = tris[f][c], b = tris[f][(c + 1) % 3], x = tris[f][(c + 2) % 3];
           if (!((points[a] - points[b]).norm() > above) || splits >= splitMost || !longest(f, a, b)) continue;
-          int g = -1, y = -1;
-          for (int h : at[b]) {
-            if (!alive[h] || h == f) continue;
-            for (int k = 0; k < 3; ++k)
-              if (tris[h][k] == b && tris[h][(k + 1) % 3] == a) g = h, y = tris[h][(k + 2) % 3];
-          }
+          int y = -1;
+          const int g = across(f, a, b, y);
           if (g < 0 || !longest(g, a, b)) continue;
           const Vec3 p = surface.closestPoint(0.5 * (points[a] + points[b])).point;
           if (!p.allFinite()) continue;
@@ -337,13 +345,8 @@ TriMesh thinned(const Surface& surface, const TriMesh& mesh, double edge, std::v
       if (!alive[f]) continue;
       for (int c = 0; c < 3; ++c) {
         const int a = tris[f][c], b = tris[f][(c + 1) % 3], x = tris[f][(c + 2) % 3];
-        // The other triangle on a -> b: b -> a in it.
-        int g = -1, y = -1;
-        for (int h : at[b]) {
-          if (!alive[h] || h == f) continue;
-          for (int k = 0; k < 3; ++k)
-            if (tris[h][k] == b && tris[h][(k + 1) % 3] == a) g = h, y = tris[h][(k + 2) % 3];
-        }
+        int y = -1;
+        const int g = across(f, a, b, y);
         if (g < 0 || x == y) continue;
         auto off = [&](int v, int d) { const int ideal = boundary[v] ? 4 : 6; return (valence[v] + d - ideal) * (valence[v] + d - ideal); };
         const int before = off(a, 0) + off(b, 0) + off(x, 0) + off(y, 0), after = off(a, -1) + off(b, -1) + off(x, 1) + off(y, 1);
@@ -748,16 +751,6 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, doub
   FieldMesh m;
   std::vector<LocalGeometry> geo;
   if (const auto* mesh = dynamic_cast<const MeshSurface*>(&surface)) {
-    // Split k x k where most edges are under `edge` (k from the median edge), then the longer ones bisected; an upload
-    // much finer than that thinned first (thinned: its vertices a subset of the upload's, `kept`).
-    auto medianOf = [](const TriMesh& t) {
-      std::vector<double> lengths;
-      for (int f = 0; f < t.F.rows(); ++f)
-        for (int c = 0; c < 3; ++c) lengths.push_back((t.V.row(t.F(f, c)) - t.V.row(t.F(f, (c + 1) % 3))).norm());
-      if (lengths.empty()) return 0.0;
-      std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
-      return lengths[lengths.size() / 2];
-    };
     // The upload split k x k (k from the median edge), its longer edges bisected: `base` is the mesh split.
     auto sampled = [&](const TriMesh& base, bool once, TriMesh& fine) {
       // Nor finer than kAreaSplitMargin times the triangles of the surface's area at `edge` need: a mesh of needles,
@@ -766,7 +759,7 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, doub
       const double needed = kAreaSplitMargin * base.area() / (std::sqrt(3.0) / 4 * edge * edge);
       const double most = std::floor(std::sqrt(std::min(double(kMaxFieldTriangles), std::max(1.0, needed)) /
                                                std::max<double>(1.0, double(base.F.rows()))));
-      const int k = once ? 1 : std::clamp(fieldSplit(medianOf(base), edge), 1, static_cast<int>(std::max(1.0, most)));
+      const int k = once ? 1 : std::clamp(fieldSplit(base.medianEdgeLength(), edge), 1, static_cast<int>(std::max(1.0, most)));
       std::vector<int> source;
       m.where.clear();
       const TriMesh split = global::split(base, k, m.where, source);
@@ -776,24 +769,29 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, doub
     sampled(mesh->mesh(), false, fine);
     // Where that leaves many more vertices than the field needs (an upload finer than the cell, or one of long and
     // short edges mixed, whose long ones the bisection splits: a marching-tetrahedra mesh), the upload is remeshed to
-    // about kThinDensity times what the field needs (thinned: `kept` its vertices' ids in the upload) and split again.
-    const double wanted = 2 * mesh->mesh().area() / (std::sqrt(3.0) * edge * edge);  // vertices of edge `edge`
+    // the field's edge (thinned: `kept` its vertices' ids in the upload) and split again.
+    const double wanted = verticesAt(mesh->mesh().area(), edge);
     std::vector<int> kept;
     const bool thinning = mesh->refinement().k <= 1 && double(fine.V.rows()) > kThinAbove * wanted;
     if (thinning) {
-      thin = thinned(surface, mesh->mesh(), edge / std::sqrt(kThinDensity), kept, cancel);
+      thin = thinned(surface, mesh->mesh(), edge, kept, cancel);
       sampled(thin, true, fine);
       m.thinnedFrom = static_cast<int>(mesh->mesh().V.rows());
       m.thinnedTo = static_cast<int>(thin.V.rows());
     }
     const TriMesh& base = thinning ? thin : mesh->mesh();
+    // An upload vertex's own geometry; a point split off an upload triangle, by its place there; a point of the
+    // remeshed upload that moved or was split off, the surface's at its closest point.
+    auto geometryOf = [&](int v) {
+      const int upload = v >= base.V.rows() ? -1 : thinning ? kept[v] : v;
+      if (upload >= 0) return mesh->vertexGeometry(upload);
+      return thinning ? mesh->closestPoint(fine.V.row(v).transpose())
+                      : mesh->geometryInTriangle(m.where[v].first, m.where[v].second);
+    };
     geo.resize(fine.V.rows());
     parallelRanges(static_cast<int>(fine.V.rows()), kPointsPerThread, [&](int begin, int end) {
       for (int v = begin; v < end; ++v)
-        geo[v] = !thinning                  ? (v < base.V.rows() ? mesh->vertexGeometry(v)
-                                                         : mesh->geometryInTriangle(m.where[v].first, m.where[v].second))
-                 : v < base.V.rows() && kept[v] >= 0 ? mesh->vertexGeometry(kept[v])
-                                                     : mesh->closestPoint(fine.V.row(v).transpose());
+        geo[v] = geometryOf(v);
     });
     m.coarse = base;
     // A refinement of a coarser upload (refined(k), k x k per triangle, in order): that upload is the coarse
