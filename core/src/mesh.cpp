@@ -103,4 +103,29 @@ void writeTextFile(const std::string& path, const std::string& text) {
   if (!out) throw Error(ErrorCode::Io, "failed writing '" + path + "'");
 }
 
+PointIndex::PointIndex(const Points& points) : points_(points) {
+  std::size_t size = 16;
+  while (size < 2 * static_cast<std::size_t>(points.rows())) size *= 2;
+  slots_.assign(size, -1);
+  mask_ = size - 1;
+  for (int row = 0; row < points.rows(); ++row) {
+    std::size_t at = exactPointHash(points(row, 0), points(row, 1), points(row, 2)) & mask_;
+    for (;; at = (at + 1) & mask_) {
+      const int s = slots_[at];
+      if (s < 0) {
+        slots_[at] = row;
+        break;
+      }
+      if (points(s, 0) == points(row, 0) && points(s, 1) == points(row, 1) && points(s, 2) == points(row, 2)) break;
+    }
+  }
+}
+
+int PointIndex::find(double x, double y, double z) const {
+  for (std::size_t at = exactPointHash(x, y, z) & mask_;; at = (at + 1) & mask_) {
+    const int s = slots_[at];
+    if (s < 0 || (points_(s, 0) == x && points_(s, 1) == y && points_(s, 2) == z)) return s;
+  }
+}
+
 }  // namespace phex

@@ -888,17 +888,17 @@ std::optional<PlanarizeReport> solveAround(PolyMesh& hex, const PolyMesh& before
                                            const PlanarizeOptions& po, const CancelFlag* cancel) {
   const int nv = static_cast<int>(hex.V.rows()), nf = hex.faceCount();
   if (before.V.rows() != solved.V.rows()) return std::nullopt;
-  std::unordered_map<ExactPoint, int, ExactPointHasher> old;
-  old.reserve(static_cast<std::size_t>(before.V.rows()));
-  for (int j = 0; j < before.V.rows(); ++j) old.emplace(ExactPoint{before.V(j, 0), before.V(j, 1), before.V(j, 2)}, j);
+  const PointIndex old(before.V);
   std::vector<char> region(static_cast<std::size_t>(nv), 0);
   const Points dupin = hex.V;
   Points start = hex.V;  // the old solve's points where the Dupin points are the old ones
-  for (int i = 0; i < nv; ++i) {
-    const auto it = old.find(ExactPoint{hex.V(i, 0), hex.V(i, 1), hex.V(i, 2)});
-    if (it == old.end()) region[i] = 1;
-    else start.row(i) = solved.V.row(it->second);
-  }
+  parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i) {
+      const int j = old.find(hex.V(i, 0), hex.V(i, 1), hex.V(i, 2));
+      if (j < 0) region[i] = 1;
+      else start.row(i) = solved.V.row(j);
+    }
+  });
   auto touches = [&](int f) {  // a face with a point of the region
     const int* ids = hex.face(f);
     return std::any_of(ids, ids + hex.faceSize(f), [&](int v) { return region[v] != 0; });

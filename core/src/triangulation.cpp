@@ -176,14 +176,37 @@ Triangulation rowLattice(const ParametricSurface& surface, double cell, bool str
 
 }  // namespace
 
+int GeometryCache::slotOf(const Vec3& p) const {
+  for (std::size_t at = exactPointHash(p.x(), p.y(), p.z()) & mask_;; at = (at + 1) & mask_) {
+    const int e = slots_[at];
+    if (e < 0 || (keys_[e].x() == p.x() && keys_[e].y() == p.y() && keys_[e].z() == p.z())) return static_cast<int>(at);
+  }
+}
+
 const LocalGeometry* GeometryCache::find(const Vec3& p) const {
-  const auto it = table_.find(ExactPoint{p.x(), p.y(), p.z()});
-  return it == table_.end() ? nullptr : &it->second;
+  if (slots_.empty()) return nullptr;
+  const int e = slots_[slotOf(p)];
+  return e < 0 ? nullptr : &entries_[e];
 }
 
 void GeometryCache::keep(const Points& V, const std::vector<LocalGeometry>& geometry, const std::vector<char>& found) {
-  for (std::size_t v = 0; v < geometry.size(); ++v)
-    if (!found[v]) table_.emplace(ExactPoint{V(Eigen::Index(v), 0), V(Eigen::Index(v), 1), V(Eigen::Index(v), 2)}, geometry[v]);
+  const std::size_t adding = geometry.size() - std::count(found.begin(), found.end(), char(1));
+  if (2 * (keys_.size() + adding) > slots_.size()) {  // at most half full: rehashed to a quarter
+    std::size_t size = 16;
+    while (size < 4 * (keys_.size() + adding)) size *= 2;
+    slots_.assign(size, -1);
+    mask_ = size - 1;
+    for (std::size_t e = 0; e < keys_.size(); ++e) slots_[slotOf(keys_[e])] = static_cast<int>(e);
+  }
+  for (std::size_t v = 0; v < geometry.size(); ++v) {
+    if (found[v]) continue;
+    const Vec3 p = V.row(Eigen::Index(v)).transpose();
+    const int at = slotOf(p);
+    if (slots_[at] >= 0) continue;  // the same point twice: the first kept
+    slots_[at] = static_cast<int>(keys_.size());
+    keys_.push_back(p);
+    entries_.push_back(geometry[v]);
+  }
 }
 
 std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface& surface, GeometryCache* cache) {
@@ -194,8 +217,10 @@ std::vector<LocalGeometry> vertexGeometry(const Triangulation& t, const Surface&
   if (exact) cache = nullptr;  // from the parameters, not the points
   std::vector<char> found(cache ? nv : 0, 0);
   if (cache)
-    for (int v = 0; v < nv; ++v)
-      if (const LocalGeometry* g = cache->find(t.mesh.V.row(v).transpose())) geo[v] = *g, found[v] = 1;
+    parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
+      for (int v = begin; v < end; ++v)
+        if (const LocalGeometry* g = cache->find(t.mesh.V.row(v).transpose())) geo[v] = *g, found[v] = 1;
+    });
   parallelRanges(nv, kPointsPerThread, [&](int begin, int end) {
     for (int v = begin; v < end; ++v) {
       if (cache && found[v]) continue;

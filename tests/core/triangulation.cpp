@@ -181,4 +181,49 @@ TEST_CASE("triangulation: a geometry cache looks up only the vertices that moved
   const DualMesh cached = dupinDual(t, s, true, &cache), plain = dupinDual(t, s);
   CHECK(cached.mesh.V == plain.mesh.V);
   CHECK(cached.mesh.indices == plain.mesh.indices);
+  // Grown far past the table it started with (every vertex moved, eight times over), it still finds each point
+  // it was given and only those: each round looks up every vertex once, and the first positions again none.
+  for (int round = 1; round <= 8; ++round) {
+    Triangulation moved = t;
+    for (int v = 0; v < nv; ++v)
+      moved.mesh.V.row(v) = torus->closestPoint(laid.row(v).transpose() + 0.002 * round * first[v].d1).point.transpose();
+    s.lookups = 0;
+    const std::vector<LocalGeometry> g = vertexGeometry(moved, s, &cache);
+    REQUIRE(s.lookups == nv);
+    for (int v : {0, nv / 2, nv - 1}) CHECK(sameGeometry(g[v], torus->closestPoint(moved.mesh.V.row(v).transpose())));
+  }
+  t.mesh.V = laid;
+  s.lookups = 0;
+  const std::vector<LocalGeometry> back = vertexGeometry(t, s, &cache);
+  CHECK(s.lookups == 0);
+  for (int v = 0; v < nv; ++v) REQUIRE(sameGeometry(back[v], first[v]));
+}
+
+TEST_CASE("triangulation: a point index finds each row by its exact coordinates") {
+  Points P(6, 3);
+  P << 0, 0, 0,  //
+      1, 2, 3,   //
+      -0.0, 0, 0,  // the same point as row 0 (-0 == +0): row 0 is the one found
+      1, 2, 3 + 1e-15,  // one bit off row 1: a point of its own
+      1, 2, 3,   // row 1 again
+      5, 5, 5;
+  const PointIndex index(P);
+  CHECK(index.find(0, 0, 0) == 0);
+  CHECK(index.find(-0.0, -0.0, 0) == 0);
+  CHECK(index.find(1, 2, 3) == 1);
+  CHECK(index.find(1, 2, 3 + 1e-15) == 3);
+  CHECK(index.find(5, 5, 5) == 5);
+  CHECK(index.find(5, 5, 5.0000001) == -1);
+  CHECK(index.find(2, 1, 3) == -1);
+  // Many rows (the table grows with them): each found at its own row, points between them not at all.
+  const int n = 50000;
+  Points Q(n, 3);
+  for (int i = 0; i < n; ++i) Q.row(i) << std::sin(0.37 * i), std::cos(1.3 * i), 0.001 * i;
+  const PointIndex big(Q);
+  int wrong = 0;
+  for (int i = 0; i < n; ++i) wrong += big.find(Q(i, 0), Q(i, 1), Q(i, 2)) != i;
+  CHECK(wrong == 0);
+  int found = 0;
+  for (int i = 0; i < n; ++i) found += big.find(Q(i, 0), Q(i, 1), Q(i, 2) + 0.0005) >= 0;
+  CHECK(found == 0);
 }
