@@ -288,6 +288,9 @@ val resultToJs(const phex::PipelineResult& r) {
   relay.set("firstNodesOfFour", r.relay.firstNodesOfFour);
   relay.set("globally", r.relay.globally);
   relay.set("firstCoverageGap", r.relay.firstCoverageGap);
+  relay.set("trials", r.relay.trials);
+  relay.set("trialNodesOfFour", r.relay.trialNodesOfFour);
+  relay.set("trialShare", r.relay.trialShare);
   out.set("relay", relay);
   val origin = val::array();
   for (int k = 0; k < 3; ++k) origin.call<void>("push", r.origin(k));

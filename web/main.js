@@ -448,6 +448,9 @@ function showStats({ metrics, solve, timings, method, field, triangulation, dual
       ? relay.globally
         ? `, laid twice (Method 2's rows: ${relay.firstCoverageGap.toFixed(2)} edges bare at most, ${relay.firstNodesOfFour} nodes of four from cuts; ${relay.kept ? 'tiled by the global method' : 'the rows kept'})`
         : `, laid twice (the ${relay.kept ? 'second' : 'first'} lay kept)`
+      : ''}${
+    relay?.trials
+      ? `, laid ${relay.trials} more time${relay.trials > 1 ? 's' : ''} for other face counts (its cuts left ${relay.trialNodesOfFour} nodes of four; ${relay.trialShare ? `the lay for ${Math.round(100 * relay.trialShare)} % of the faces kept` : 'the first kept'})`
       : ''}`;
   $('timings').textContent = Object.entries(timings)
     .filter(([stage]) => stage !== 'total')

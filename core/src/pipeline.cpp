@@ -2540,6 +2540,15 @@ PipelineResult::Relay relayAfter(const PipelineResult& first) {
   return relay;
 }
 
+// Another lay's stage times added to `timings`, stage by stage (a stage new to them at the end).
+void addTimings(std::vector<StageTiming>& timings, const std::vector<StageTiming>& more) {
+  for (const StageTiming& t : more) {
+    auto same = std::find_if(timings.begin(), timings.end(), [&](const StageTiming& s) { return s.stage == t.stage; });
+    if (same != timings.end()) same->milliseconds += t.milliseconds;
+    else timings.push_back(t);
+  }
+}
+
 // The result kept after a second lay: its `relay`, the surface reuse of the first lay (the second reuses the
 // surface the first read), and both lays' time, stage by stage (in the order the first ran them).
 void keepAfterRelay(PipelineResult& kept, const PipelineResult& first, const PipelineResult& second,
@@ -2547,11 +2556,7 @@ void keepAfterRelay(PipelineResult& kept, const PipelineResult& first, const Pip
   kept.relay = relay;
   kept.surfaceReused = first.surfaceReused;
   std::vector<StageTiming> timings = first.timings;
-  for (const StageTiming& t : second.timings) {
-    auto same = std::find_if(timings.begin(), timings.end(), [&](const StageTiming& s) { return s.stage == t.stage; });
-    if (same != timings.end()) same->milliseconds += t.milliseconds;
-    else timings.push_back(t);
-  }
+  addTimings(timings, second.timings);
   kept.timings = std::move(timings);
   kept.totalMilliseconds = first.totalMilliseconds + second.totalMilliseconds;
 }
@@ -2618,19 +2623,13 @@ PipelineResult coveredGlobally(PipelineResult first, const PipelineParams& param
   return std::move(kept);
 }
 
-}  // namespace
-
-PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
-  PipelineResult first = coveredGlobally(runOnce(params, progress, cancel), params, progress, cancel);
-  const bool noisy = first.surface && noisyUpload(*first.surface);
-  const bool fellShort = !reached(first) || nodesOfFourCut(first) > kRelayNodesOfFour * first.metrics.faceCount;
-  if (!params.relay || first.method != TriangulationMethod::Global || noisy || !fellShort || first.relay.tried) {
-    if (progress) progress({"done", 1, "done"});
-    return first;
-  }
-  // Laid again following the Dupin metric further. On a near-developable part the flatter curvature decides which
-  // triangles are valid (Props. 4, 5: with an edge off the flatter direction by more than about the curvature
-  // ratio, a dual face folds), and the default metric, bounded and regularized, follows little of it there.
+// The global method laid again following the Dupin metric further, where `first` fell short (runPipeline); the
+// better of the two, and in `keptParams` the parameters that laid it.
+PipelineResult relayed(PipelineResult first, const PipelineParams& params, PipelineParams& keptParams,
+                       const ProgressFn& progress, const CancelFlag* cancel) {
+  // On a near-developable part the flatter curvature decides which triangles are valid (Props. 4, 5: with an edge
+  // off the flatter direction by more than about the curvature ratio, a dual face folds), and the default metric,
+  // bounded and regularized, follows little of it there.
   PipelineParams again = params;
   again.anisotropy = std::max(params.anisotropy, kRelayAnisotropy);
   again.curvatureFloor = std::min(params.curvatureFloor, kRelayFloor);
@@ -2640,10 +2639,7 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   relay.curvatureFloor = again.curvatureFloor;
   std::optional<PipelineResult> laid =
       layAgain(again, first, relay, "laid again following the Dupin metric further", "the first lay is", progress, cancel);
-  if (!laid) {
-    if (progress) progress({"done", 1, "done"});
-    return first;
-  }
+  if (!laid) return first;
   PipelineResult& second = *laid;
   // The one that reached a P-Hex mesh; both did: the one whose cuts made fewer nodes of four faces (then more
   // hexagons); neither: the first.
@@ -2664,9 +2660,97 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
       << ": the " << (better ? "second" : "first") << " is kept";
     kept.triangulation.notes.push_back(s.str());
   }
+  if (better) keptParams = again;
   keepAfterRelay(kept, first, second, relay);
-  if (progress) progress({"done", 1, "done"});
   return std::move(kept);
+}
+
+// Where the lay kept (`best`, laid by `laidWith`) still has nodes of four faces from cuts and at most kTrialMostFaces
+// faces were asked for, it is laid again for each of kTrialShares of the faces (a cell given: the cell scaled as
+// that would), stopping at one without such nodes; kept: the one that reached a P-Hex mesh, then with fewer nodes
+// of four, then more hexagons, among those within kTrialCountMiss of the faces asked. The global method's cuts come
+// from a few places where the lattice falls badly against the surface (next to parabolic curves, around a handle
+// a few cells across), and its lattice falls otherwise at a face count a few percent off: on the generated genus
+// 0-3 and ten clean surfaces at 1000-5000 faces (52 runs), nodes of four 238 -> 72 (METHOD.md). The time is each
+// lay's, summed.
+constexpr double kTrialCountMiss = 0.1;  // the goal: the face count within 10 % of the count asked
+PipelineResult withTrials(PipelineResult best, const PipelineParams& params, const PipelineParams& laidWith,
+                          const ProgressFn& progress, const CancelFlag* cancel) {
+  const int size = params.cell > 0 ? best.metrics.faceCount : params.faces;  // a cell given: the faces it gave
+  if (nodesOfFourCut(best) == 0 || size > kTrialMostFaces || size <= 0) return best;
+  auto countOk = [&](const PipelineResult& r) {
+    return params.cell > 0 || std::abs(r.metrics.faceCount - params.faces) <= kTrialCountMiss * params.faces;
+  };
+  auto better = [&](const PipelineResult& a, const PipelineResult& b) {  // a better than b
+    if (countOk(a) != countOk(b)) return countOk(a);
+    if (reached(a) != reached(b)) return reached(a);
+    if (nodesOfFourCut(a) != nodesOfFourCut(b)) return nodesOfFourCut(a) < nodesOfFourCut(b);
+    return a.interiorHexagonFraction > b.interiorHexagonFraction;
+  };
+  PipelineResult::Relay relay = best.relay;
+  relay.trialNodesOfFour = nodesOfFourCut(best);
+  double total = best.totalMilliseconds;
+  std::vector<StageTiming> timings = best.timings;
+  std::vector<std::string> tried;
+  std::string keptAs;  // the trial kept, as the note names it
+  for (double share : kTrialShares) {
+    PipelineParams p = laidWith;
+    std::ostringstream as;
+    as.precision(4);
+    if (params.cell > 0) p.cell = params.cell / std::sqrt(share), as << "at a cell of " << p.cell;
+    else p.faces = std::max(1, static_cast<int>(std::lround(share * params.faces))), as << "for " << p.faces << " faces";
+    if (progress) progress({"triangulate", 0, "laying again " + as.str() + " (a trial: the lay's cuts left nodes of four faces)"});
+    ++relay.trials;
+    PipelineResult r;
+    try {
+      r = runOnce(p, progress, cancel);
+    } catch (const Error& e) {
+      if (e.code() == ErrorCode::Cancelled) throw;
+      tried.push_back(as.str() + ": not tiled (" + e.what() + ")");
+      continue;
+    }
+    total += r.totalMilliseconds;
+    addTimings(timings, r.timings);
+    tried.push_back(as.str() + ": " + std::to_string(r.metrics.faceCount) + " faces, " +
+                    (reached(r) ? "converged" : "no P-Hex mesh") + ", " + std::to_string(nodesOfFourCut(r)) + " nodes of four");
+    if (better(r, best)) {
+      r.surfaceReused = best.surfaceReused;
+      best = std::move(r);
+      relay.trialShare = share;
+      keptAs = as.str();
+    }
+    if (reached(best) && nodesOfFourCut(best) == 0 && countOk(best)) break;
+  }
+  std::ostringstream s;
+  s << "the lay left " << relay.trialNodesOfFour << " nodes of four faces from its cuts; laid again as trials (";
+  for (std::size_t i = 0; i < tried.size(); ++i) s << (i ? "; " : "") << tried[i];
+  s << "): " << (keptAs.empty() ? std::string("the lay before them") : "the one " + keptAs) << " is kept";
+  best.triangulation.notes.push_back(s.str());
+  best.relay = relay;
+  best.timings = std::move(timings);
+  best.totalMilliseconds = total;
+  return best;
+}
+
+}  // namespace
+
+PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
+  PipelineResult first = coveredGlobally(runOnce(params, progress, cancel), params, progress, cancel);
+  const bool noisy = first.surface && noisyUpload(*first.surface);
+  if (!params.relay || first.method != TriangulationMethod::Global || noisy) {
+    if (progress) progress({"done", 1, "done"});
+    return first;
+  }
+  // The parameters of the lay kept so far: those asked (under auto the choice of method runs again, and says so in
+  // the notes), or where Method 2's rows gave way to the global method, the global method's.
+  PipelineParams laidWith = params;
+  if (first.relay.globally) laidWith.method = TriangulationMethod::Global;
+  const bool fellShort = !reached(first) || nodesOfFourCut(first) > kRelayNodesOfFour * first.metrics.faceCount;
+  PipelineResult kept = fellShort && !first.relay.tried ? relayed(std::move(first), params, laidWith, progress, cancel)
+                                                        : std::move(first);
+  kept = withTrials(std::move(kept), params, laidWith, progress, cancel);
+  if (progress) progress({"done", 1, "done"});
+  return kept;
 }
 
 }  // namespace phex

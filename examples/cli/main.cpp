@@ -69,8 +69,10 @@ Options of `phex run`:
                             uploads); an upload under auto whose Method 2 rows leave a point of it over a
                             mean panel edge from any panel, cut faces, or reach no P-Hex mesh: tile it by
                             the global method and keep that where it reaches one covering the upload more
-                            closely or, both within a panel edge, with fewer nodes of four faces from cuts
-                            (report: relay) (default on)
+                            closely or, both within a panel edge, with fewer nodes of four faces from cuts;
+                            then, at up to 5000 faces, where the global lay kept still has nodes of four from
+                            cuts, lay it again for 3 % fewer and more faces and keep the best (report: relay)
+                            (default on)
   --fold-flips on|off       global: where the dual solved with folds allowed has faces crossing themselves
                             (at most 8 % of them), merge each one's vertex with its neighbour along the
                             flatter principal direction (else flip an edge of its star) and solve again:
@@ -301,7 +303,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"relay", {{"tried", r.relay.tried}, {"kept", r.relay.kept}, {"globally", r.relay.globally},
                      {"anisotropy", r.relay.anisotropy}, {"curvatureFloor", r.relay.curvatureFloor},
                      {"firstReached", r.relay.firstReached}, {"firstNodesOfFour", r.relay.firstNodesOfFour},
-                     {"firstCoverageGap", r.relay.firstCoverageGap}}},
+                     {"firstCoverageGap", r.relay.firstCoverageGap}, {"trials", r.relay.trials},
+                     {"trialNodesOfFour", r.relay.trialNodesOfFour}, {"trialShare", r.relay.trialShare}}},
           {"surfaceFit", {{"applied", r.solve.surfaceFitted}, {"distanceBefore", r.solve.surfaceDistanceBefore},
                           {"distanceAfter", r.solve.surfaceDistanceAfter}, {"freeNodesSettled", r.solve.freeNodesSettled},
                           {"boundaryNodesPlaced", r.solve.boundaryNodesPlaced}}},

@@ -714,6 +714,7 @@ PipelineResult bubbleGlobal(int faces, double alignment = PipelineParams().align
   p.alignment = alignment;
   p.anisotropy = anisotropy;
   p.fairness = fairness;
+  p.relay = false;  // one lay: the tests below look at what its solve does (no second lay, no trial lays)
   return runPipeline(p);
 }
 // Converged, planar to the tolerance, no face crossing itself, and every node within the distance goal.
@@ -833,6 +834,43 @@ TEST_CASE("pipeline: the global method lays a near-developable surface again whe
   const PipelineResult once = runPipeline(p);
   CHECK_FALSE(once.relay.tried);
   CHECK_FALSE(once.solve.converged);
+}
+
+// The Dupin cyclide laid globally at 1000 faces converges with 10 interior faces cut (20 nodes of four faces, 2 %
+// of its faces: no second lay); its lattice for 970 faces falls otherwise next to the parabolic circles and
+// converges with none cut.
+TEST_CASE("pipeline: where the global lay's cuts leave nodes of four faces, trial lays for other face counts are kept if better") {
+  PipelineParams p;
+  p.surface = "cyclide";
+  p.method = TriangulationMethod::Global;
+  p.faces = 1000;
+  p.relay = false;
+  const PipelineResult once = runPipeline(p);
+  const int onceFour = 2 * once.interiorFacesSplit + once.boundaryPanelsSplit;
+  REQUIRE(onceFour > 0);
+  CHECK(once.relay.trials == 0);
+  p.relay = true;
+  const PipelineResult r = runPipeline(p);
+  const int four = 2 * r.interiorFacesSplit + r.boundaryPanelsSplit;
+  std::string notes;
+  for (const std::string& note : r.triangulation.notes) notes += note + "\n";
+  INFO(notes);
+  CHECK_FALSE(r.relay.tried);  // not the second lay: its cuts stayed under kRelayNodesOfFour
+  CHECK(r.relay.trials >= 1);
+  CHECK(r.relay.trials <= static_cast<int>(std::size(kTrialShares)));
+  CHECK(r.relay.trialNodesOfFour == onceFour);
+  CHECK((r.relay.trialShare == kTrialShares[0] || r.relay.trialShare == kTrialShares[1]));
+  CHECK(four < onceFour);
+  CHECK(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+  CHECK(std::abs(r.metrics.faceCount - p.faces) <= 0.1 * p.faces);
+  CHECK(notes.find("laid again as trials") != std::string::npos);
+  CHECK(r.totalMilliseconds >= once.totalMilliseconds * 0.5);
+  // Over kTrialMostFaces faces none runs (each lay there costs what the goals' time allows for one).
+  p.faces = kTrialMostFaces + 1000;
+  p.relay = true;
+  CHECK(runPipeline(p).relay.trials == 0);
 }
 
 // A noisy upload's curvature ratios are noise: followed further, the shared models lost 3-7 points of hexagons

@@ -115,13 +115,14 @@ test('boundary nodes end on the surface\'s boundary curve (a clean edge), and a 
 });
 
 test('a sliver of a boundary panel cut against a fold, lying outside the curve, is removed and its neighbours clipped', async () => {
-  // The hyperbolic paraboloid laid globally at 1000 faces: one boundary panel cut in two, the piece beyond the curve.
-  const r = await phex.run({ surface: 'hyperbolic-paraboloid', method: 'global', faces: 1000 });
+  // The hyperbolic paraboloid laid globally at 1000 faces: one boundary panel cut in two, the piece beyond the curve
+  // (that lay: relay 'off', as the trial lays would replace it by one without the cut).
+  const r = await phex.run({ surface: 'hyperbolic-paraboloid', method: 'global', faces: 1000, relay: 'off' });
   assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9);
   assert.equal(r.boundaryClip.removed, 1, JSON.stringify(r.boundaryClip));
   assert.equal(r.boundaryClip.skipped, 0, JSON.stringify(r.boundaryClip));
   assert.equal(r.metrics.boundaryFace.length, r.hex.faceOffsets.length - 1);
-  const off = await phex.run({ surface: 'hyperbolic-paraboloid', method: 'global', faces: 1000, clipBoundary: 'off' });
+  const off = await phex.run({ surface: 'hyperbolic-paraboloid', method: 'global', faces: 1000, clipBoundary: 'off', relay: 'off' });
   assert.equal(off.boundaryClip.removed, 0);
   assert.equal(off.hex.faceOffsets.length - 1 - 1, r.hex.faceOffsets.length - 1 - r.boundaryClip.fillers);
 });
@@ -199,6 +200,23 @@ test("relay reaches the core: a shallow dome the first lay leaves unconverged is
   assert.equal(once.solve.converged, false, 'the first lay alone stalls');
   const torus = await globalTorus();
   assert.equal(torus.relay.tried, false, 'a lay that reached a P-Hex mesh with few cuts is not laid again');
+});
+
+test('trial lays reach the core: where the lay cuts faces, it is laid again for 3 % fewer and more faces and the best kept', async () => {
+  // The Dupin cyclide laid globally at 1000 faces: 10 interior faces cut (20 nodes of four); laid for 970, none.
+  const params = { surface: 'cyclide', faces: 1000, method: 'global' };
+  const once = await phex.run({ ...params, relay: 'off' });
+  const four = (r) => 2 * r.solve.interiorFacesSplit + r.solve.boundaryPanelsSplit;
+  assert.ok(four(once) > 0);
+  assert.equal(once.relay.trials, 0);
+  const r = await phex.run(params);
+  assert.ok(r.relay.trials >= 1 && r.relay.trials <= 2, JSON.stringify(r.relay));
+  assert.equal(r.relay.trialNodesOfFour, four(once));
+  assert.ok([0.97, 1.03].includes(r.relay.trialShare), JSON.stringify(r.relay));
+  assert.ok(four(r) < four(once), `${four(r)} against ${four(once)}`);
+  assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9);
+  assert.ok(Math.abs(r.metrics.faceCount - 1000) <= 100, String(r.metrics.faceCount));
+  assert.ok(r.triangulation.notes.some((n) => /laid again as trials/.test(n)), r.triangulation.notes.join('\n'));
 });
 
 test("foldFlips reaches the core: on the torus the notes say how many vertices were merged, and fewer faces are cut", async () => {

@@ -28,6 +28,11 @@ constexpr double kCoverageGapGoal = 1.0;
 // The global method's second lay (PipelineParams::relay): the metric it follows, and the share of the faces beyond
 // which the first lay's cuts (two nodes of four faces per interior face cut, one per boundary panel) call for it.
 constexpr double kRelayAnisotropy = 2.5, kRelayFloor = 0.05, kRelayNodesOfFour = 0.05;
+// The global method's trial lays (PipelineParams::relay): where the lay kept still has nodes of four faces from
+// cuts, at up to kTrialMostFaces faces, it is laid again for kTrialShares of the faces (its lattice then falls
+// otherwise around the few places where the solve had to cut) and the best is kept.
+constexpr int kTrialMostFaces = 5000;
+constexpr double kTrialShares[] = {0.97, 1.03};
 
 // How the triangulation is laid (§5, §7).
 enum class TriangulationMethod {
@@ -118,6 +123,8 @@ struct PipelineParams {
   // On a near-developable surface the flatter curvature decides which triangles are valid (Props. 4, 5), and the
   // regularized metric follows too little of it: a shallow elliptic paraboloid (radii 1 and 30) laid globally
   // stalls at 1000 and 5000 faces or cuts 273 faces at 3000, and converges with 3-22 cut laid again (METHOD.md).
+  // Then, at up to kTrialMostFaces faces, where the lay kept still has nodes of four faces from cuts: laid again
+  // for kTrialShares of the faces (or the cell scaled so), and the best kept (PipelineResult::Relay::trials).
   bool relay = true;
   // The global method's triangulation: where its dual, solved with folds allowed, has faces crossing themselves
   // (at most 8 % of them: not on a coarse or noisy upload), each such face's vertex merged with its neighbour
@@ -194,6 +201,12 @@ struct PipelineResult {
     bool firstReached = false;
     int firstNodesOfFour = 0;
     double firstCoverageGap = 0;  // (globally) the rows' coverage gap, in mean panel edges
+    // Trial lays for other face counts (kTrialShares) where the lay kept had nodes of four from cuts: how many
+    // ran, the nodes of four the lay before them left, and the share of the faces (or the cell's scale as for
+    // that share) of the one kept (0: none of them, the lay before stands).
+    int trials = 0;
+    int trialNodesOfFour = 0;
+    double trialShare = 0;
   } relay;
   std::vector<StageTiming> timings;
   double totalMilliseconds = 0.0;
