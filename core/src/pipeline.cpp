@@ -2667,8 +2667,9 @@ PipelineResult relayed(PipelineResult first, const PipelineParams& params, Pipel
 
 // Where the lay kept (`best`, laid by `laidWith`) still has nodes of four faces from cuts and at most kTrialMostFaces
 // faces were asked for, it is laid again for each of kTrialShares of the faces (a cell given: the cell scaled as
-// that would), stopping at one without such nodes; kept: the one that reached a P-Hex mesh, then with fewer nodes
-// of four, then more hexagons, among those within kTrialCountMiss of the faces asked. The global method's cuts come
+// that would), stopping at one without such nodes; kept: the one that reached a P-Hex mesh, then covering the
+// surface within the coverage goal, then with fewer nodes of four, then more hexagons, among those within
+// kTrialCountMiss of the faces asked. The global method's cuts come
 // from a few places where the lattice falls badly against the surface (next to parabolic curves, around a handle
 // a few cells across), and its lattice falls otherwise at a face count a few percent off: on the generated genus
 // 0-3 and ten clean surfaces at 1000-5000 faces (52 runs), nodes of four 238 -> 72 (METHOD.md). The time is each
@@ -2681,9 +2682,11 @@ PipelineResult withTrials(PipelineResult best, const PipelineParams& params, con
   auto countOk = [&](const PipelineResult& r) {
     return params.cell > 0 || std::abs(r.metrics.faceCount - params.faces) <= kTrialCountMiss * params.faces;
   };
+  auto covers = [](const PipelineResult& r) { return r.coverageGap <= kCoverageGapGoal; };
   auto better = [&](const PipelineResult& a, const PipelineResult& b) {  // a better than b
     if (countOk(a) != countOk(b)) return countOk(a);
     if (reached(a) != reached(b)) return reached(a);
+    if (covers(a) != covers(b)) return covers(a);
     if (nodesOfFourCut(a) != nodesOfFourCut(b)) return nodesOfFourCut(a) < nodesOfFourCut(b);
     return a.interiorHexagonFraction > b.interiorHexagonFraction;
   };
@@ -2719,7 +2722,7 @@ PipelineResult withTrials(PipelineResult best, const PipelineParams& params, con
       relay.trialShare = share;
       keptAs = as.str();
     }
-    if (reached(best) && nodesOfFourCut(best) == 0 && countOk(best)) break;
+    if (reached(best) && covers(best) && nodesOfFourCut(best) == 0 && countOk(best)) break;
   }
   std::ostringstream s;
   s << "the lay left " << relay.trialNodesOfFour << " nodes of four faces from its cuts; laid again as trials (";

@@ -432,7 +432,8 @@ export interface RunParams {
    * more closely or, both within a panel edge, with fewer nodes of four faces from cuts. Then, at up to 5000 faces,
    * where the global lay kept still has nodes of four faces from cuts, it is laid again for 3 % fewer and 3 % more
    * faces (its lattice falls otherwise around the places where it had to cut) and the best kept: reaching a P-Hex
-   * mesh, then fewer nodes of four, then more hexagons, its face count within 10 % of the count asked.
+   * mesh, then covering the surface within a mean panel edge, then fewer nodes of four, then more hexagons, its face
+   * count within 10 % of the count asked.
    * `result.relay` says what ran. 'off': the first lay stands.
    */
   relay?: 'on' | 'off';
