@@ -2669,11 +2669,10 @@ PipelineResult relayed(PipelineResult first, const PipelineParams& params, Pipel
 // faces were asked for, it is laid again for each of kTrialShares of the faces (a cell given: the cell scaled as
 // that would), stopping at one without such nodes; kept: the one that reached a P-Hex mesh, then covering the
 // surface within the coverage goal, then with fewer nodes of four, then more hexagons, among those within
-// kTrialCountMiss of the faces asked. The global method's cuts come
-// from a few places where the lattice falls badly against the surface (next to parabolic curves, around a handle
-// a few cells across), and its lattice falls otherwise at a face count a few percent off: on the generated genus
-// 0-3 and ten clean surfaces at 1000-5000 faces (52 runs), nodes of four 238 -> 72 (METHOD.md). The time is each
-// lay's, summed.
+// kTrialCountMiss of the faces asked. The global method's cuts come from a few places where the lattice falls
+// badly against the surface (next to parabolic curves, around a handle a few cells across), and its lattice falls
+// otherwise at a face count a few percent off: on the generated genus 0-3 and ten clean surfaces at 1000-5000
+// faces (52 runs), nodes of four 238 -> 72 (METHOD.md). The time is each lay's, summed.
 constexpr double kTrialCountMiss = 0.1;  // the goal: the face count within 10 % of the count asked
 PipelineResult withTrials(PipelineResult best, const PipelineParams& params, const PipelineParams& laidWith,
                           const ProgressFn& progress, const CancelFlag* cancel) {
