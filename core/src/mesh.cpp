@@ -1,9 +1,9 @@
-#include <vector>
-#include <algorithm>
 #include "phex/mesh.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <vector>
 
 #include "phex/error.hpp"
 
@@ -103,29 +103,16 @@ void writeTextFile(const std::string& path, const std::string& text) {
   if (!out) throw Error(ErrorCode::Io, "failed writing '" + path + "'");
 }
 
-PointIndex::PointIndex(const Points& points) : points_(points) {
-  std::size_t size = 16;
-  while (size < 2 * static_cast<std::size_t>(points.rows())) size *= 2;
-  slots_.assign(size, -1);
-  mask_ = size - 1;
-  for (int row = 0; row < points.rows(); ++row) {
-    std::size_t at = exactPointHash(points(row, 0), points(row, 1), points(row, 2)) & mask_;
-    for (;; at = (at + 1) & mask_) {
-      const int s = slots_[at];
-      if (s < 0) {
-        slots_[at] = row;
-        break;
-      }
-      if (points(s, 0) == points(row, 0) && points(s, 1) == points(row, 1) && points(s, 2) == points(row, 2)) break;
-    }
+PointIndex::PointIndex(const Points& points) : points_(points), slots_(exactPointSlots(points.rows())) {
+  auto rowOf = [this](int r) { return row(r); };
+  for (int r = 0; r < points.rows(); ++r) {
+    int& slot = slots_[exactPointSlot(slots_, points(r, 0), points(r, 1), points(r, 2), rowOf)];
+    if (slot < 0) slot = r;  // of equal rows, the first
   }
 }
 
 int PointIndex::find(double x, double y, double z) const {
-  for (std::size_t at = exactPointHash(x, y, z) & mask_;; at = (at + 1) & mask_) {
-    const int s = slots_[at];
-    if (s < 0 || (points_(s, 0) == x && points_(s, 1) == y && points_(s, 2) == z)) return s;
-  }
+  return slots_[exactPointSlot(slots_, x, y, z, [this](int r) { return row(r); })];
 }
 
 }  // namespace phex

@@ -773,25 +773,18 @@ RawMesh readPly(const std::uint8_t* data, std::size_t size, const std::string& n
 // table of vertex ids, hashed on the coordinates.
 class Welder {
  public:
-  Welder(RawMesh& mesh, std::size_t corners) : mesh_(mesh) {
-    std::size_t capacity = 16;
-    while (capacity < 2 * corners) capacity *= 2;
-    table_.assign(capacity, -1);
-  }
+  Welder(RawMesh& mesh, std::size_t corners) : mesh_(mesh), table_(exactPointSlots(corners)) {}
   int add(double x, double y, double z) {
     const double p[3] = {x + 0.0, y + 0.0, z + 0.0};  // + 0.0 turns -0 into +0
-    const std::uint64_t h = exactPointHash(x, y, z);
-    const std::size_t mask = table_.size() - 1;
-    for (std::size_t slot = h & mask;; slot = (slot + 1) & mask) {
-      const int id = table_[slot];
-      if (id < 0) {
-        table_[slot] = mesh_.vertexCount();
-        mesh_.xyz.insert(mesh_.xyz.end(), p, p + 3);
-        return table_[slot];
-      }
+    const std::size_t slot = exactPointSlot(table_, p[0], p[1], p[2], [&](int id) {
       const double* q = &mesh_.xyz[3 * static_cast<std::size_t>(id)];
-      if (q[0] == p[0] && q[1] == p[1] && q[2] == p[2]) return id;
+      return Vec3(q[0], q[1], q[2]);
+    });
+    if (table_[slot] < 0) {
+      table_[slot] = mesh_.vertexCount();
+      mesh_.xyz.insert(mesh_.xyz.end(), p, p + 3);
     }
+    return table_[slot];
   }
 
  private:

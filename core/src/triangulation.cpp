@@ -176,11 +176,8 @@ Triangulation rowLattice(const ParametricSurface& surface, double cell, bool str
 
 }  // namespace
 
-int GeometryCache::slotOf(const Vec3& p) const {
-  for (std::size_t at = exactPointHash(p.x(), p.y(), p.z()) & mask_;; at = (at + 1) & mask_) {
-    const int e = slots_[at];
-    if (e < 0 || (keys_[e].x() == p.x() && keys_[e].y() == p.y() && keys_[e].z() == p.z())) return static_cast<int>(at);
-  }
+std::size_t GeometryCache::slotOf(const Vec3& p) const {
+  return exactPointSlot(slots_, p.x(), p.y(), p.z(), [this](int e) { return keys_[e]; });
 }
 
 const LocalGeometry* GeometryCache::find(const Vec3& p) const {
@@ -192,16 +189,13 @@ const LocalGeometry* GeometryCache::find(const Vec3& p) const {
 void GeometryCache::keep(const Points& V, const std::vector<LocalGeometry>& geometry, const std::vector<char>& found) {
   const std::size_t adding = geometry.size() - std::count(found.begin(), found.end(), char(1));
   if (2 * (keys_.size() + adding) > slots_.size()) {  // at most half full: rehashed to a quarter
-    std::size_t size = 16;
-    while (size < 4 * (keys_.size() + adding)) size *= 2;
-    slots_.assign(size, -1);
-    mask_ = size - 1;
+    slots_ = exactPointSlots(2 * (keys_.size() + adding));
     for (std::size_t e = 0; e < keys_.size(); ++e) slots_[slotOf(keys_[e])] = static_cast<int>(e);
   }
   for (std::size_t v = 0; v < geometry.size(); ++v) {
     if (found[v]) continue;
     const Vec3 p = V.row(Eigen::Index(v)).transpose();
-    const int at = slotOf(p);
+    const std::size_t at = slotOf(p);
     if (slots_[at] >= 0) continue;  // the same point twice: the first kept
     slots_[at] = static_cast<int>(keys_.size());
     keys_.push_back(p);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -35,14 +36,25 @@ inline std::uint64_t exactPointHash(double x, double y, double z) {
   }
   return h;
 }
-// A point as the key of a hash table on exact coordinates: equal by == (-0 and +0 one key), hashed alike.
-struct ExactPoint {
-  double x, y, z;
-  bool operator==(const ExactPoint& o) const { return x == o.x && y == o.y && z == o.z; }
-};
-struct ExactPointHasher {
-  std::size_t operator()(const ExactPoint& p) const { return static_cast<std::size_t>(exactPointHash(p.x, p.y, p.z)); }
-};
+// Tables keyed on exact coordinates by open addressing: item numbers (-1 where empty) in a power-of-two table,
+// probed linearly from the coordinates' hash. The empty table for up to `items` items, at most half full.
+inline std::vector<int> exactPointSlots(std::size_t items) {
+  std::size_t size = 16;
+  while (size < 2 * items) size *= 2;
+  return std::vector<int>(size, -1);
+}
+// The slot of `slots` holding the item at (x, y, z) (equal by ==: -0 and +0 alike), `point(item)` giving an item's
+// coordinates as a Vec3; or, where there is none, the empty slot where it goes.
+template <typename PointOf>
+std::size_t exactPointSlot(const std::vector<int>& slots, double x, double y, double z, const PointOf& point) {
+  const std::size_t mask = slots.size() - 1;
+  for (std::size_t at = exactPointHash(x, y, z) & mask;; at = (at + 1) & mask) {
+    const int item = slots[at];
+    if (item < 0) return at;
+    const Vec3 q = point(item);
+    if (q.x() == x && q.y() == y && q.z() == z) return at;
+  }
+}
 
 // The point of segment ab nearest to p (a when the segment has no length).
 inline Vec3 closestPointOnSegment(const Vec3& p, const Vec3& a, const Vec3& b) {

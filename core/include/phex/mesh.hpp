@@ -33,8 +33,8 @@ class PointIndex {
 
  private:
   const Points& points_;
-  std::vector<int> slots_;  // row numbers, -1 where empty
-  std::size_t mask_ = 0;
+  std::vector<int> slots_;  // row numbers (exactPointSlots)
+  Vec3 row(int r) const { return points_.row(r).transpose(); }
 };
 
 // A polygon mesh: face f has the vertex ids indices[offsets[f] .. offsets[f+1]), CCW seen from the normal side.

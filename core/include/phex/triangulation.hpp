@@ -44,12 +44,12 @@ class GeometryCache {
   void keep(const Points& V, const std::vector<LocalGeometry>& geometry, const std::vector<char>& found);
 
  private:
-  // Open addressing over the entries' numbers (an unordered_map took 12 ms a look-up of 100k vertices).
+  // Open addressing over the entries' numbers (exactPointSlots; an unordered_map took 12 ms a look-up of 100k
+  // vertices).
   std::vector<Vec3> keys_;
   std::vector<LocalGeometry> entries_;
-  std::vector<int> slots_;  // entry numbers, -1 where empty
-  std::size_t mask_ = 0;
-  int slotOf(const Vec3& p) const;  // the slot holding p, or the empty one where it would go
+  std::vector<int> slots_;
+  std::size_t slotOf(const Vec3& p) const;  // the slot holding p, or the empty one where it would go
 };
 
 // The local geometry at every vertex: exact from `uv` on a parametric surface, else from closestPoint (the
