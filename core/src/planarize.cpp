@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -751,10 +752,14 @@ SurfaceFit fitPlanesToSurface(PolyMesh& mesh, const Surface& surface, const Canc
     for (int v = 0; v < nv; ++v) worst = std::max(worst, (feet[v].point - mesh.vertex(v)).norm());
     return worst;
   };
-  auto selfIntersecting = [&]() {
-    int count = 0;
-    for (int f = 0; f < nf; ++f) count += folds(f);
-    return count;
+  auto selfIntersecting = [&]() {  // over threads
+    std::atomic<int> count{0};
+    parallelRanges(nf, kFacesPerThread, [&](int begin, int end) {
+      int here = 0;
+      for (int f = begin; f < end; ++f) here += folds(f);
+      count += here;
+    });
+    return count.load();
   };
   fit.before = footPoints();
   // A node's move follows the shifts of its faces that are not frozen (G): where a node as far off as the farthest
