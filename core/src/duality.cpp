@@ -271,19 +271,10 @@ int untangleDual(DualMesh& dual, const TriMesh& T, const std::vector<LocalGeomet
   PolyMesh& M = dual.mesh;
   const int nvd = static_cast<int>(M.V.rows()), nfd = M.faceCount();
   // Each point's faces, as compressed rows (a list per point took 10 ms a round at 100k faces).
-  std::vector<int> facesStart(nvd + 1, 0), facesList;
-  for (int f = 0; f < nfd; ++f)
-    for (int k = 0; k < M.faceSize(f); ++k) ++facesStart[M.face(f)[k] + 1];
-  for (int i = 0; i < nvd; ++i) facesStart[i + 1] += facesStart[i];
-  facesList.resize(facesStart[nvd]);
-  {
-    std::vector<int> fill(facesStart.begin(), facesStart.end() - 1);
-    for (int f = 0; f < nfd; ++f)
-      for (int k = 0; k < M.faceSize(f); ++k) facesList[fill[M.face(f)[k]]++] = f;
-  }
+  const FacesAtVertices at = facesAtVertices(M, [](int) { return true; });
   auto crossingAt = [&](int i) {
     int n = 0;
-    for (int j = facesStart[i]; j < facesStart[i + 1]; ++j) n += faceSelfIntersects(M, facesList[j]);
+    for (int j = at.start[i]; j < at.start[i + 1]; ++j) n += faceSelfIntersects(M, at.faces[j]);
     return n;
   };
   // Which faces cross themselves as a sweep starts, over threads; in the sweep a face with a corner moved since is

@@ -146,29 +146,6 @@ class RoundCallback final : public ceres::IterationCallback {
 };
 
 
-// The faces at each vertex as one flat array: those of vertex v are faces[start[v] .. start[v + 1]), in
-// increasing order; only the faces `keep` accepts.
-struct FacesAtVertices {
-  std::vector<int> start, faces;
-};
-
-template <class Keep>
-FacesAtVertices facesAtVertices(const PolyMesh& mesh, Keep keep) {
-  const int nv = static_cast<int>(mesh.V.rows()), nf = mesh.faceCount();
-  FacesAtVertices a;
-  a.start.assign(nv + 1, 0);
-  for (int f = 0; f < nf; ++f)
-    if (keep(f))
-      for (int i = 0; i < mesh.faceSize(f); ++i) ++a.start[mesh.face(f)[i] + 1];
-  for (int v = 0; v < nv; ++v) a.start[v + 1] += a.start[v];
-  a.faces.resize(a.start[nv]);
-  std::vector<int> fill(a.start.begin(), a.start.end() - 1);
-  for (int f = 0; f < nf; ++f)
-    if (keep(f))
-      for (int i = 0; i < mesh.faceSize(f); ++i) a.faces[fill[mesh.face(f)[i]]++] = f;
-  return a;
-}
-
 // The least-squares plane of `face` (normal n, offset d = n·centroid) by power iteration on the adjugate
 // of the face's covariance matrix: its dominant eigenvector is the covariance's smallest one, and each
 // step shrinks the other components by λ1/λ2 (about the squared planarity, so a few steps reach

@@ -52,6 +52,28 @@ struct PolyMesh {
   double meanEdgeLength() const;
 };
 
+// The faces at each vertex of a polygon mesh as one flat array (compressed rows): those of vertex v are
+// faces[start[v] .. start[v + 1]), in increasing order; only the faces `keep` accepts.
+struct FacesAtVertices {
+  std::vector<int> start, faces;
+};
+template <class Keep>
+FacesAtVertices facesAtVertices(const PolyMesh& mesh, Keep keep) {
+  const int nv = static_cast<int>(mesh.V.rows()), nf = mesh.faceCount();
+  FacesAtVertices a;
+  a.start.assign(nv + 1, 0);
+  for (int f = 0; f < nf; ++f)
+    if (keep(f))
+      for (int i = 0; i < mesh.faceSize(f); ++i) ++a.start[mesh.face(f)[i] + 1];
+  for (int v = 0; v < nv; ++v) a.start[v + 1] += a.start[v];
+  a.faces.resize(a.start[nv]);
+  std::vector<int> fill(a.start.begin(), a.start.end() - 1);
+  for (int f = 0; f < nf; ++f)
+    if (keep(f))
+      for (int i = 0; i < mesh.faceSize(f); ++i) a.faces[fill[mesh.face(f)[i]]++] = f;
+  return a;
+}
+
 // Wavefront OBJ text of a polygon / triangle mesh (1-based indices, 17 significant digits).
 std::string toObj(const PolyMesh& mesh);
 std::string toObj(const TriMesh& mesh);
