@@ -893,12 +893,14 @@ constexpr double kEarHeight = 0.03;
 // kAsymptoticBoundary of the largest: a helicoid's helices and end rulings, whose panels fold all along them and
 // whose boundary would be thinned out), nor where one of its two boundary edges is over kDropEven times the other
 // (a boundary edge left long by a drop nearby). The round is kept where it gains as any round does (panels fewer,
-// interior folds no more). On the 40 clean runs laid once: nodes of four faces 78 -> 67, boundary panels cut 17 ->
-// 9; with the trial lays (the default) 22 -> 21 and 4 -> 3; no run more; the bubble at 10000 faces 3 -> 0 (its
-// boundary nodes 0.12 -> 0.00 mean edges off the curve), at 2000 1 -> 0. Dropped in every round instead, as flips are
-// (no round of their own), the runs laid once went 78 -> 71 but the bubble at 1000 faces 2 -> 4 and the rounds'
-// course changed elsewhere (the paraboloid 1/30 at 1000 faces with defaults 0 -> 2); at 1000 faces the drop round
-// does not gain and is not kept. The bench's upload at 10k and 100k faces is the same mesh.
+// interior folds no more) or leaves fewer nodes of four in all (fewerNodes: its repairs may leave an interior fold
+// more). On the 40 clean runs laid once: nodes of four faces 78 -> 67, boundary panels cut 17 -> 9; with the trial
+// lays (the default) 22 -> 21 and 4 -> 3; no run more; the bubble at 10000 faces 3 -> 0 (its boundary nodes 0.12 ->
+// 0.00 mean edges off the curve), at 2000 1 -> 0; the bench's upload at 100k faces 91 + 21 -> 92 + 10 faces cut
+// (11 vertices dropped, one interior fold more: kept by fewerNodes), at 10k the same mesh. Dropped in every round
+// instead, as flips are (no round of their own), the runs laid once went 78 -> 71 but the bubble at 1000 faces 2 ->
+// 4 and the rounds' course changed elsewhere (the paraboloid 1/30 at 1000 faces with defaults 0 -> 2); at 1000 faces
+// the drop round does not gain and is not kept. Run only where the rounds left no interior fold, 75 laid once.
 constexpr double kAsymptoticBoundary = 0.3, kDropEven = 1.5;
 
 // A dual mesh as the local solver left it, with its report.
@@ -1058,7 +1060,10 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     // folded panels did not drop with no more interior folds.
     const bool fewerFolds = bestFolds > 0 && folded.size() <= kFoldGain * double(bestFolds);
     const bool fewerPanels = folded.size() <= bestFolds && foldedPanels.size() < bestPanels;
-    if (fewerFolds || fewerPanels) {
+    // The round of drops: fewer nodes of four in all (an interior fold cut makes two, a panel cut one); its repairs
+    // around the drops can leave an interior fold more.
+    const bool fewerNodes = dropping && 2 * folded.size() + foldedPanels.size() < 2 * bestFolds + bestPanels;
+    if (fewerFolds || fewerPanels || fewerNodes) {
       best = t, bestFolds = folded.size(), bestPanels = foldedPanels.size(), kept = done;
       kept.folded = static_cast<int>(folded.size());
       keptDual = std::move(dual);
@@ -1068,7 +1073,7 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     }
     // The rounds done (the last gained too little, or kFoldRounds ran): folded panels left get one round of drops
     // alone, from the triangulation kept, itself kept where it gains as a round does.
-    if (!(fewerFolds || fewerPanels) || round >= kFoldRounds) {
+    if (!(fewerFolds || fewerPanels || fewerNodes) || round >= kFoldRounds || dropping) {
       if (dropping || keptPanels.empty() || !panelsToo) break;
       dropping = true;
       t = best, done = kept;
@@ -1342,6 +1347,7 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
       --triangles[x], --triangles[y], ++triangles[c], ++triangles[o];
       ++done.flips;
     }
+    if (dropping && done.drops == kept.drops) break;  // no vertex to drop: no round to solve (t is `best`)
     // The vertices a change touched (a merge's two and their neighbours, a flip's four corners, an alignment's two
     // and the moved one's neighbours), by their ids after the merges.
     std::vector<int> id(nv);
