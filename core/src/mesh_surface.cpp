@@ -425,8 +425,9 @@ MeshSurface::MeshSurface(TriMesh mesh, std::string name) : mesh_(std::move(mesh)
     findRulings();
     for (int v = 0; v < nv; ++v) alongRuling(vertexGeometry_[v], rulings_[v]);
   }
-  buildTree();
-  buildGrid();
+  // The tree and the grid are built from the triangles alone, each into its own members: side by side (the bench's
+  // upload refined for 100k faces, 979k triangles: 155 and 79 ms one after the other).
+  parallelTasks(2, [&](int which) { which == 0 ? buildTree() : buildGrid(); });
 }
 
 // An interior edge a-b between triangles f and g whose planes turn by more than kCreaseDegrees. Slivers (their
