@@ -2282,8 +2282,8 @@ Triangulation layTriangulation(const Surface& surface, const LayingOptions& opti
     throw Error(ErrorCode::CannotTile, "direction field '" + options.field + "' is singular at the start point " +
                                            describe(walker, start) + "; choose another start point or field");
   auto normalCurvature = [&](const Vec3& d) {
-    const double a = d.dot(g.d1), b = d.dot(g.d2);
-    return std::abs(g.k1 * a * a + g.k2 * b * b);
+    const Vec2 t = tangentVector(g, d);
+    return std::abs(secondFundamentalForm(g, t, t));
   };
   Family family;
   if (!dF || !dG) {

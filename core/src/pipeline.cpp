@@ -1092,17 +1092,15 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
       keptPanels = foldedPanels;
       fromKept = true, worse = 0;
       if (folded.empty() && foldedPanels.empty()) break;
-    } else if (goOn) {
+    }
+    if (goOn) {  // its interior folds alone changed in turn
       ++worse;
       lastDual = std::move(dual);
       lastSolve = SolvedDual{hex, std::move(solved)};
       fromKept = false;
-    }
-    // The rounds done (the last gained too little, or kFoldRounds ran): folded panels left get one round of drops
-    // alone, from the triangulation kept, itself kept where it gains as a round does.
-    if (goOn) {
-      // Its interior folds alone changed in turn.
     } else if (!gained || round >= kFoldRounds || dropping) {
+      // The rounds done (the last gained too little, or kFoldRounds ran): folded panels left get one round of drops
+      // alone, from the triangulation kept, itself kept where it gains as a round does.
       if (dropping || keptPanels.empty() || !panelsToo) break;
       dropping = true;
       t = best, done = kept;
@@ -1334,13 +1332,10 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
           // instead: merged into the nearer of them, which stays where it is, its two triangles one, (w, c, o).
           auto curved = [&] {  // the boundary there is not along an asymptotic direction (kAsymptoticBoundary)
             const LocalGeometry g = surface.closestPoint(V);
-            Vec3 along = Q - P;
-            along -= along.dot(g.normal) * g.normal;
+            const Vec2 along = tangentVector(g, Q - P);
             if (!(along.norm() > 0)) return false;
-            along.normalize();
-            const double c1 = along.dot(g.d1), c2 = along.dot(g.d2);
-            const double normal = g.k1 * c1 * c1 + g.k2 * c2 * c2;
-            return std::abs(normal) > kAsymptoticBoundary * g.largestCurvature();
+            const Vec2 unit = along.normalized();
+            return std::abs(secondFundamentalForm(g, unit, unit)) > kAsymptoticBoundary * g.largestCurvature();
           };
           const double toP = (P - V).norm(), toQ = (Q - V).norm();
           const bool even = std::max(toP, toQ) <= kDropEven * std::min(toP, toQ);
