@@ -291,6 +291,8 @@ val resultToJs(const phex::PipelineResult& r) {
   relay.set("trials", r.relay.trials);
   relay.set("trialNodesOfFour", r.relay.trialNodesOfFour);
   relay.set("trialShare", r.relay.trialShare);
+  relay.set("noisyRepairs", r.relay.noisyRepairs);
+  relay.set("noisyRepairsKept", r.relay.noisyRepairsKept);
   out.set("relay", relay);
   val origin = val::array();
   for (int k = 0; k < 3; ++k) origin.call<void>("push", r.origin(k));

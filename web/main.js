@@ -451,6 +451,9 @@ function showStats({ metrics, solve, timings, method, field, triangulation, dual
       : ''}${
     relay?.trials
       ? `, laid ${relay.trials} more time${relay.trials > 1 ? 's' : ''} for other face counts (its cuts left ${relay.trialNodesOfFour} nodes of four; ${relay.trialShare ? `the lay for ${Math.round(100 * relay.trialShare)} % of the faces kept` : 'the first kept'})`
+      : ''}${
+    relay?.noisyRepairs
+      ? `, a noisy upload laid again with the repairs of a smooth one (${relay.noisyRepairsKept ? 'that lay kept' : 'the first lay kept'})`
       : ''}`;
   $('timings').textContent = Object.entries(timings)
     .filter(([stage]) => stage !== 'total')

@@ -230,12 +230,18 @@ double triangleSize(const TriMesh& mesh) {
   return mesh.F.rows() > 0 ? std::sqrt(4 * mesh.area() / (std::sqrt(3.0) * double(mesh.F.rows()))) : 0.0;
 }
 
+// Whether `mesh` has a crease that a refinement would round off (MeshSurface::Creases::sharp): not on a noisy
+// upload, whose sharpest turns are its faceting's (PH-CPF's car, genus-3 model and intersection shell: 77, 174 and 143
+// edges turning by over 30 degrees, up to 48-69, scattered over the mesh). Refined, they reach a P-Hex mesh at
+// 10000 faces where their facets stalled every lay (METHOD.md).
+bool creased(const MeshSurface& mesh) { return mesh.creases().sharp() && !(mesh.noise() > MeshSurface::kNoisyMesh); }
+
 // How finely to refine `mesh`, whose triangles are of `size` (triangleSize), for `cell` (1: not at all).
 // Neither a plane (nothing to smooth) nor a mesh with a sharp crease (which the jets would round off: it gets
 // its note instead); a low-poly mesh whose facets turn by 30 degrees here and there, about as much as
 // elsewhere, is refined.
 int refinementFor(const MeshSurface& mesh, double size, double cell) {
-  if (mesh.planar() || mesh.creases().sharp() || !(cell > 0) || !(size > kCoarseUpload * cell)) return 1;
+  if (mesh.planar() || creased(mesh) || !(cell > 0) || !(size > kCoarseUpload * cell)) return 1;
   const double most = std::floor(std::sqrt(double(MeshSurface::kMaxRefinedTriangles) / double(mesh.mesh().F.rows())));
   const int smooth = static_cast<int>(std::clamp(std::ceil(size / (kRefinedEdge * cell)), 1.0, std::max(1.0, most)));
   // The global method's field mesh splits the refined triangles again, j x j (globalFieldSplit), so its edge is the
@@ -338,7 +344,7 @@ void validate(const PipelineParams& p) {
     fail("the lattice method needs an analytic surface; use method 'progressive' or 'prespecified' for an uploaded mesh");
 }
 
-GlobalOptions globalOptions(const PipelineParams& p, double cell) {
+GlobalOptions globalOptions(const PipelineParams& p, double cell, const Surface* surface) {
   GlobalOptions o;
   o.cell = cell;
   o.faces = cell > 0 ? 0 : p.faces;
@@ -346,6 +352,9 @@ GlobalOptions globalOptions(const PipelineParams& p, double cell) {
   o.alignment = p.alignment;
   o.curvatureSizing = p.curvatureSizing;
   o.curvatureFloor = p.curvatureFloor;
+  // Dislocations glided together only where the surface is smooth, unless asked: on the noisy shared models (20
+  // runs) they gave 1.7-2.4 points more hexagons but cut 114 -> 122-155 interior faces, none converging either way.
+  o.glideDislocations = p.noisyRepairs || !surface || !noisyUpload(*surface);
   return o;
 }
 
@@ -795,7 +804,7 @@ namespace {
 // noisy shared models it turned stalls into convergence by cutting many faces (3holes at 3000 faces: 4 -> 48 cut,
 // 88.6 -> 78.9 % hexagons; six_s0 at 5000: 9 -> 406; METHOD.md), which is not the trade asked for.
 double fairnessFor(const PipelineParams& params, TriangulationMethod method, const Surface& surface) {
-  return method == TriangulationMethod::Global && !noisyUpload(surface) ? params.fairness : 0.0;
+  return method == TriangulationMethod::Global && (params.noisyRepairs || !noisyUpload(surface)) ? params.fairness : 0.0;
 }
 
 // The solver's options as the run's parameters ask for them, for a triangulation laid by `method` on `surface`.
@@ -1044,7 +1053,7 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
   const double floor = params.cell > 0 ? 0.0 : kCollapseFloor * params.faces;
   const int budget = t.uv.empty() ? static_cast<int>(std::max(0.0, std::min(kCollapseShare * vertices, vertices - floor))) : 0;
   GeometryCache geometry;  // the vertices' closest points, from one look-up to the next (most vertices stay)
-  const bool panelsToo = !noisyUpload(surface);  // folded boundary panels as well (kBoundaryFlipFewest)
+  const bool panelsToo = params.noisyRepairs || !noisyUpload(surface);  // folded boundary panels as well (kBoundaryFlipFewest)
   bool dropping = false;       // the last round: boundary vertices dropped alone (kDropEven)
   std::vector<int> keptPanels;  // the folded panels of the round kept, by face of keptDual
   // A round not kept that the next goes on from (kFoldPatience), else (fromKept) the round kept.
@@ -1632,8 +1641,11 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
         s << "the uploaded mesh is coarse for this lay (its triangles' size " << size
           << " against a cell of " << cellAsked << "): ";
         // Too coarse for its fits to agree (a steep dome sampled 4 x 4, whose fits around a corner span most
-        // of it): their blend would crease where the mesh does not, so the facets are laid as they are.
-        if (refined->creases().sharp()) {
+        // of it): their blend would crease where the mesh does not, so the facets are laid as they are. A noisy
+        // upload's facets turn sharply themselves: refined where that turns less sharply than they do (PH-CPF's
+        // car, genus-3 model and intersection shell: 48 -> 31, 58 -> 40 and 69 -> 53 degrees at 3000 faces).
+        const bool smoother = upload->noise() > MeshSurface::kNoisyMesh && refined->creases().degrees < upload->creases().degrees;
+        if (refined->creases().sharp() && !smoother) {
           s << "too coarse to be refined smoothly (the fits around its vertices disagree: the refinement would turn by "
             << std::lround(refined->creases().degrees) << " degrees between neighbouring triangles), so laid on its facets; "
                "upload a finer mesh for panels that follow the surface";
@@ -1696,7 +1708,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
     if (checked) {
       // Laid above, by the geodesic route.
     } else if (params.method == TriangulationMethod::Global) {
-      t.triangulation = globalTriangulation(*t.surface, globalOptions(params, params.cell > 0 ? params.cell : 0), progress, cancel);
+      t.triangulation = globalTriangulation(*t.surface, globalOptions(params, params.cell > 0 ? params.cell : 0, t.surface.get()), progress, cancel);
       // The lattice's stars are near-equilateral in the bounded Dupin frame; where a defect or the bound leaves one
       // failing Props. 4, 5, the local repair mends it (the shared models at 3000 faces: 120-500 invalid stars
       // to 1-140).
@@ -1814,7 +1826,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       auto layGlobal = [&](const std::string& why) {
         params.method = t.method = TriangulationMethod::Global;
         t.field.clear();
-        t.triangulation = globalTriangulation(*t.surface, globalOptions(params, params.cell > 0 ? params.cell : 0), progress, cancel);
+        t.triangulation = globalTriangulation(*t.surface, globalOptions(params, params.cell > 0 ? params.cell : 0, t.surface.get()), progress, cancel);
         repairStars(t.triangulation, *t.surface);
         surfaceNote += (surfaceNote.empty() ? "" : "; ") + why;
       };
@@ -2879,13 +2891,12 @@ PipelineResult withTrials(PipelineResult best, const PipelineParams& params, con
 
 }  // namespace
 
-PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
-  PipelineResult first = coveredGlobally(runOnce(params, progress, cancel), params, progress, cancel);
-  const bool noisy = first.surface && noisyUpload(*first.surface);
-  if (!params.relay || first.method != TriangulationMethod::Global || noisy) {
-    if (progress) progress({"done", 1, "done"});
-    return first;
-  }
+namespace {
+
+// After `first` (laid by `params`), the global method laid again where it fell short (relayed), then the trial lays
+// (withTrials).
+PipelineResult relayAndTrials(PipelineResult first, const PipelineParams& params, const ProgressFn& progress,
+                              const CancelFlag* cancel) {
   // The parameters of the lay kept so far: those asked (under auto the choice of method runs again, and says so in
   // the notes), or where Method 2's rows gave way to the global method, the global method's.
   PipelineParams laidWith = params;
@@ -2893,7 +2904,52 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   const bool fellShort = !reached(first) || nodesOfFourCut(first) > kRelayNodesOfFour * first.metrics.faceCount;
   PipelineResult kept = fellShort && !first.relay.tried ? relayed(std::move(first), params, laidWith, progress, cancel)
                                                         : std::move(first);
-  kept = withTrials(std::move(kept), params, laidWith, progress, cancel);
+  return withTrials(std::move(kept), params, laidWith, progress, cancel);
+}
+
+// A noisy upload whose first lay (without the repairs, PipelineParams::noisyRepairs) did not reach a P-Hex mesh,
+// laid again with them as a smooth upload is (relayed and trial lays included); the second kept where it reached
+// one. On the five noisy shared models at 1000, 1500, 3000 and 10000 faces the first lays reached none; the
+// second 15 of 20 (cutting 0-277 faces; the genus-3 model at 1500 faces 131 and the car at 3000 faces 277, a tenth
+// of its faces), with 2-15 points fewer hexagons where they did (METHOD.md).
+PipelineResult withNoisyRepairs(PipelineResult first, const PipelineParams& params, const ProgressFn& progress,
+                                const CancelFlag* cancel) {
+  PipelineParams again = params;
+  again.noisyRepairs = true;
+  if (first.relay.globally) again.method = TriangulationMethod::Global;
+  if (progress) progress({"triangulate", 0, "laying again with the repairs of a smooth upload (the first lay fell short)"});
+  PipelineResult::Relay relay = relayAfter(first);
+  relay.globally = first.relay.globally;
+  relay.noisyRepairs = true;
+  std::optional<PipelineResult> laid = layAgain(again, first, relay, "laid again with the repairs of a smooth upload",
+                                                "the first lay is", progress, cancel);
+  if (!laid) return first;
+  PipelineResult second = relayAndTrials(std::move(*laid), again, progress, cancel);
+  const bool better = reached(second);
+  PipelineResult& kept = better ? second : first;
+  PipelineResult::Relay keptRelay = better ? second.relay : relay;
+  keptRelay.noisyRepairs = true;
+  keptRelay.noisyRepairsKept = better;
+  std::ostringstream s;
+  s << "the uploaded mesh is noisy, and its first lay, without the solver's fairness, the changes at folded boundary "
+       "panels and the dislocation glides (on noisy meshes they trade hexagons for cuts), did not reach a P-Hex mesh ("
+    << relay.firstNodesOfFour << " nodes of four faces from its cuts); laid again with them, as a smooth upload is, it "
+    << (better ? "reached one with " + std::to_string(nodesOfFourCut(second)) + " nodes of four faces from its cuts: the second is kept"
+               : std::string("did not reach one either: the first is kept"));
+  kept.triangulation.notes.push_back(s.str());
+  keepAfterRelay(kept, first, second, keptRelay);
+  return std::move(kept);
+}
+
+}  // namespace
+
+PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
+  PipelineResult first = coveredGlobally(runOnce(params, progress, cancel), params, progress, cancel);
+  const bool noisy = first.surface && noisyUpload(*first.surface) && !params.noisyRepairs;
+  PipelineResult kept = !params.relay || first.method != TriangulationMethod::Global ? std::move(first)
+                        : !noisy                                                 ? relayAndTrials(std::move(first), params, progress, cancel)
+                        : reached(first) ? std::move(first)
+                                         : withNoisyRepairs(std::move(first), params, progress, cancel);
   if (progress) progress({"done", 1, "done"});
   return kept;
 }

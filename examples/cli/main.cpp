@@ -65,8 +65,10 @@ Options of `phex run`:
                             near-developable surface's elongated indicatrix further, up to --anisotropy)
   --relay on|off            global: where the lay does not reach a P-Hex mesh, or its cuts make nodes of
                             four faces at over 5 % of its faces, lay it again following the Dupin metric
-                            further (anisotropy 2.5, curvature floor 0.05) and keep the better (not on noisy
-                            uploads); an upload under auto whose Method 2 rows leave a point of it over a
+                            further (anisotropy 2.5, curvature floor 0.05) and keep the better (a noisy
+                            upload's first lay leaves out the repairs that trade hexagons for cuts there;
+                            where it reaches no P-Hex mesh it is laid again with them, kept where that one
+                            does); an upload under auto whose Method 2 rows leave a point of it over a
                             mean panel edge from any panel, cut faces, or reach no P-Hex mesh: tile it by
                             the global method and keep that where it reaches one covering the upload more
                             closely or, both within a panel edge, with fewer nodes of four faces from cuts;
@@ -93,7 +95,7 @@ Options of `phex run`:
   --fairness F              global: the local solver pulls each interior node towards its neighbours'
                             mean with F times the square root of lambda, gone with lambda: the faces'
                             planes follow a smooth mesh instead of folding, 0..1 (default 0.03; not on
-                            noisy uploads)
+                            a noisy upload's first lay, see --relay)
   --max-iterations N        Gauss-Newton iteration cap (default 100)
   --duality auto|dupin|tangent
                             initial hexagonal mesh: Dupin duality (§6), tangent duality (§4.1), or
@@ -304,7 +306,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                      {"anisotropy", r.relay.anisotropy}, {"curvatureFloor", r.relay.curvatureFloor},
                      {"firstReached", r.relay.firstReached}, {"firstNodesOfFour", r.relay.firstNodesOfFour},
                      {"firstCoverageGap", r.relay.firstCoverageGap}, {"trials", r.relay.trials},
-                     {"trialNodesOfFour", r.relay.trialNodesOfFour}, {"trialShare", r.relay.trialShare}}},
+                     {"trialNodesOfFour", r.relay.trialNodesOfFour}, {"trialShare", r.relay.trialShare},
+                     {"noisyRepairs", r.relay.noisyRepairs}, {"noisyRepairsKept", r.relay.noisyRepairsKept}}},
           {"surfaceFit", {{"applied", r.solve.surfaceFitted}, {"distanceBefore", r.solve.surfaceDistanceBefore},
                           {"distanceAfter", r.solve.surfaceDistanceAfter}, {"freeNodesSettled", r.solve.freeNodesSettled},
                           {"boundaryNodesPlaced", r.solve.boundaryNodesPlaced}}},

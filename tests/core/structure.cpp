@@ -364,6 +364,8 @@ TEST_CASE("structure: an uploaded free-form mesh") {
     p.faces = 3000;
     // From the tangent dual, whose solve cuts some 300 faces here (under auto the Dupin dual's is kept: it cuts 1).
     p.duality = Duality::Tangent;
+    // Its first lay alone (laid again with the repairs of a smooth upload, it reaches a P-Hex mesh with fewer cuts).
+    p.relay = false;
     const PipelineResult r = runPipeline(p);
     const NodeAxes ax = nodeAxes(r.hex);
     // The solve cut faces here that only folding would make planar: nodes of four or more faces and panels folded
@@ -378,8 +380,10 @@ TEST_CASE("structure: an uploaded free-form mesh") {
     // The boundary rule: measured 192 of 307 boundary beams planar (11 of 26 runs), the rest kept closest to the
     // surface normal (their runs would need turns beyond 30°, or have no planar solution). (From the Dupin dual,
     // 261 of 298; at 1500 faces, 425 of 596 when the annulus's curvature was fitted over 3 full rings across its
-    // sharpest bends.) At least half.
-    CHECK(ax.boundaryBeamsPlanar >= 0.5 * ax.boundaryBeams);
+    // sharpest bends.) Since stop 24 the annulus, noisy and laid at 3000 faces finer than its triangles, is refined
+    // into a smooth surface: 200 of 536 (its clipped boundary panels follow the smooth curve with more, shorter
+    // beams). At least 0.3.
+    CHECK(ax.boundaryBeamsPlanar >= 0.3 * ax.boundaryBeams);
     CHECK(ax.boundaryRunsPlanar < ax.boundaryRuns);
     // Folds leave the offset a short range: within it the exact parts are exact; beyond, the error names it.
     REQUIRE(ax.offsetMax > 0);

@@ -278,8 +278,11 @@ export interface Result {
    * rows left partly bare (coverage gap over 1), brought to a P-Hex mesh only by cutting faces, or left unsolved,
    * tiled by the global method. `tried` false: one lay. `trials`: where the lay kept still had nodes of four faces
    * from cuts (`trialNodesOfFour`) at up to 5000 faces, how many trial lays for 3 % fewer and more faces ran, and the
-   * share of the faces asked (or the cell's scale as for it) of the one kept (`trialShare`; 0: the lay before them). */
-  relay: { tried: boolean; kept: boolean; globally: boolean; anisotropy: number; curvatureFloor: number; firstReached: boolean; firstNodesOfFour: number; firstCoverageGap: number; trials: number; trialNodesOfFour: number; trialShare: number };
+   * share of the faces asked (or the cell's scale as for it) of the one kept (`trialShare`; 0: the lay before them).
+   * A noisy upload whose first lay did not reach a P-Hex mesh is laid again with the repairs of a smooth upload (the
+   * solver's fairness, the changes at folded boundary panels, the dislocation glides, the relay and the trials):
+   * `noisyRepairs`, and whether that lay was kept (`noisyRepairsKept`: it reached one). */
+  relay: { tried: boolean; kept: boolean; globally: boolean; anisotropy: number; curvatureFloor: number; firstReached: boolean; firstNodesOfFour: number; firstCoverageGap: number; trials: number; trialNodesOfFour: number; trialShare: number; noisyRepairs: boolean; noisyRepairsKept: boolean };
   /** An upload far from the origin (more than ten times its size: site coordinates) is computed about the
    * centre of its box, this point, where its coordinates keep their digits; every mesh and note here is in the
    * file's coordinates all the same. [0, 0, 0] otherwise. */
@@ -426,8 +429,10 @@ export interface RunParams {
   /**
    * Method 'global': where the lay does not reach a P-Hex mesh (not converged, faces crossing themselves or nodes
    * far off), or its cuts make nodes of four faces at over 5 % of its faces, it is laid again following the Dupin
-   * metric further (anisotropy 2.5, curvature floor 0.05) and the better kept ('on', default; not on noisy
-   * uploads). Under 'auto', an upload whose Method 2 rows leave a point of it over a mean panel edge from any panel,
+   * metric further (anisotropy 2.5, curvature floor 0.05) and the better kept ('on', default). A noisy upload's first
+   * lay is laid without the repairs that trade hexagons for cuts there (the fairness, the changes at folded boundary
+   * panels, the dislocation glides) and not again this way; where it does not reach a P-Hex mesh, it is laid again
+   * with them, as a smooth upload is (this relay and the trials included), and that lay kept where it reaches one. Under 'auto', an upload whose Method 2 rows leave a point of it over a mean panel edge from any panel,
    * cut faces, or reach no P-Hex mesh is tiled by the global method, kept where it reaches one covering the upload
    * more closely or, both within a panel edge, with fewer nodes of four faces from cuts. Then, at up to 5000 faces,
    * where the global lay kept still has nodes of four faces from cuts, it is laid again for 3 % fewer and 3 % more
@@ -440,7 +445,7 @@ export interface RunParams {
   /**
    * Method 'global': the local solver pulls each interior node towards its neighbours' mean with this weight times
    * the square root of `lambda`, gone with it, in [0, 1]. Default 0.03: the faces' planes follow a smooth mesh
-   * instead of folding (fewer faces cut). Not on noisy uploads; 0 turns it off.
+   * instead of folding (fewer faces cut). Not on a noisy upload's first lay (see `relay`); 0 turns it off.
    */
   fairness?: number;
 }

@@ -44,6 +44,9 @@ struct GlobalOptions {
   // How far the cell follows the curvature, in [0, 1]: 0 uniform panels; 1 cells shrinking as the square root
   // of the largest |curvature| relative to the surface's median (within a factor 3 either way).
   double curvatureSizing = 0.0;
+  // Whether the lattice's dislocations (a vertex of 5 next to one of 7) are glided together by edge flips and
+  // cancelled (on by default; the pipeline leaves it off for a noisy upload's first lay, PipelineParams::noisyRepairs).
+  bool glideDislocations = true;
 };
 
 // Throws Error(InvalidParameter) naming the first option out of its range.

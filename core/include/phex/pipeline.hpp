@@ -133,10 +133,18 @@ struct PipelineParams {
   // uploaded bumps at 3000-20000 faces 80-83 % fewer cuts, as many hexagons or more, 2-6 % fewer faces; on the
   // torus and the analytic bumps laid globally 23-88 % fewer cuts, a point or two of hexagons less (METHOD.md).
   bool foldFlips = true;
+  // A noisy upload (MeshSurface::noise over kNoisyMesh: a scan, a coarse mesh whose facets turn sharply) is first
+  // solved without the solver's fairness, the rounds' changes at folded boundary panels, the dislocation glides and
+  // the lay again above: on such meshes they trade hexagons for cuts. Where that first lay does not reach a P-Hex
+  // mesh and `relay` is on, runPipeline lays it again with them (this set), as a smooth upload is laid, and keeps
+  // the one that reached it (PipelineResult::Relay::noisyRepairs). Set, they apply from the first lay. On the five
+  // noisy shared models at 1000-10000 faces, 0 -> 15 of 20 runs reach a P-Hex mesh (METHOD.md).
+  bool noisyRepairs = false;
 };
 
-// The global method's options of `params`, at `cell` (0: calibrated to params.faces).
-GlobalOptions globalOptions(const PipelineParams& params, double cell);
+// The global method's options of `params`, at `cell` (0: calibrated to params.faces), for `surface` where given
+// (its dislocations glided unless it is a noisy upload laid without PipelineParams::noisyRepairs).
+GlobalOptions globalOptions(const PipelineParams& params, double cell, const Surface* surface = nullptr);
 
 // "dupin" / "tangent" / "auto" <-> Duality; parseDuality throws Error(InvalidParameter) for other names.
 Duality parseDuality(const std::string& name);
@@ -207,6 +215,9 @@ struct PipelineResult {
     int trials = 0;
     int trialNodesOfFour = 0;
     double trialShare = 0;
+    // A noisy upload's first lay fell short and it was laid again with PipelineParams::noisyRepairs; whether that
+    // lay (and what followed it) was kept.
+    bool noisyRepairs = false, noisyRepairsKept = false;
   } relay;
   std::vector<StageTiming> timings;
   double totalMilliseconds = 0.0;

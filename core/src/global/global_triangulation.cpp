@@ -145,9 +145,7 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       report(0.8, "relaxation");
       Triangulation t;
       t.mesh = std::move(best.mesh);
-      // Dislocations glided together only where the surface is smooth: on the noisy shared models (20 runs) they
-      // gave 1.7-2.4 points more hexagons but cut 114 -> 122-155 interior faces, none converging either way.
-      const int flips = improveValences(t.mesh, surface, !noisyUpload(surface), cancel);
+      const int flips = improveValences(t.mesh, surface, options.glideDislocations, cancel);
       fitToField(t.mesh, best.seeds, surface, m, fields[0], scale, bestCell, kFitRounds, cancel);
       // The field's singular points, from the field mesh; the field's directions at the vertices, for display.
       int plus = 0, minus = 0;
