@@ -107,3 +107,18 @@ test('wasm and native CLI give the same fine upload, remeshed for the global met
     await assertSameRun(['--mesh', mesh, '--faces', '500', '--method', 'global'], params);
   });
 });
+
+// A noisy upload whose first lay falls short is laid again with the repairs of a smooth upload (fairness, changes at
+// folded boundary panels, dislocation glides, relay and trial lays): the same mesh in both builds, and the report
+// says which lay was kept. PH-CPF's open annulus at 1500 faces (tests/data, CC BY-SA 4.0) reaches a P-Hex mesh so.
+test('wasm and native CLI give the same noisy upload, laid again with the repairs', { skip: noCli }, async () => {
+  const file = fileURLToPath(new URL('../data/phcpf_six_s0.off', import.meta.url));
+  const params = { mesh: new Uint8Array(readFileSync(file)), meshFormat: 'off', meshName: 'phcpf_six_s0.off', faces: 1500 };
+  const phex = await createPHex();
+  const r = await phex.run(params);
+  phex.dispose();
+  assert.ok(r.relay.noisyRepairs && r.relay.noisyRepairsKept, JSON.stringify(r.relay));
+  assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
+  assert.ok(r.triangulation.notes.some((note) => /laid again with them, as a smooth upload is, it reached one/.test(note)), r.triangulation.notes.join('\n'));
+  await assertSameRun(['--mesh', file, '--faces', '1500'], params);
+});
