@@ -355,6 +355,7 @@ GlobalOptions globalOptions(const PipelineParams& p, double cell, const Surface*
   // Dislocations glided together only where the surface is smooth, unless asked: on the noisy shared models (20
   // runs) they gave 1.7-2.4 points more hexagons but cut 114 -> 122-155 interior faces, none converging either way.
   o.glideDislocations = p.noisyRepairs || !surface || !noisyUpload(*surface);
+  o.freeAlignedBoundary = !surface || !noisyUpload(*surface);
   return o;
 }
 

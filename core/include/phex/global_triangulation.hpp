@@ -47,6 +47,12 @@ struct GlobalOptions {
   // Whether the lattice's dislocations (a vertex of 5 next to one of 7) are glided together by edge flips and
   // cancelled (on by default; the pipeline leaves it off for a noisy upload's first lay, PipelineParams::noisyRepairs).
   bool glideDislocations = true;
+  // On a surface whose field is held to the flatter principal direction over most of it (a near-developable), the
+  // boundary left free where that hold is strong, so that rows run along the flatter direction to the boundary
+  // and end there cleanly instead of bending along it (on by default; the pipeline leaves it off on a noisy
+  // upload, whose curvature ratios are noise). The elliptic paraboloids 1:10 and 1:30 laid globally at 3000
+  // faces: 96.5 -> 99.1 % and 93.9 -> 99.7 % hexagons.
+  bool freeAlignedBoundary = true;
 };
 
 // Throws Error(InvalidParameter) naming the first option out of its range.

@@ -195,7 +195,9 @@ Vec3 matchDirection(const Vec3& reference, const Frame& b, const Vec3& q, const 
   return nearestOfSix(reference, normalized(transport(q, a, b, e)), b.n, turns);
 }
 
-std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& scale) {
+constexpr double kAlignedSurface = 0.5, kAlignedBoundary = 0.5;
+
+std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& scale, bool freeAlignedBoundary) {
   std::vector<Level> levels(1);
   Level& L = levels[0];
   const int n = mesh.vertexCount();
@@ -206,9 +208,19 @@ std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& s
   L.alignWeight = mesh.alignWeight;
   L.scale = scale;
   L.fixed = mesh.boundary;
+  // On a surface whose field is held to the flatter principal direction over most of it (a near-developable: the
+  // mean alignment weight over kAlignedSurface), the boundary is not fixed where that hold is strong
+  // (kAlignedBoundary): rows along a boundary that runs across the flatter direction end every other one at
+  // a vertex of 5 or 7 faces next to it, while rows along the flatter direction end at the boundary cleanly, their
+  // panels clipped to it. (Not where the caller says the curvature is noise: GlobalOptions::freeAlignedBoundary.)
+  double held = 0;
+  for (int v = 0; v < n; ++v) held += mesh.alignWeight[v];
+  if (freeAlignedBoundary && n > 0 && held > kAlignedSurface * n)
+    for (int v = 0; v < n; ++v)
+      if (mesh.alignWeight[v] > kAlignedBoundary) L.fixed[v] = 0;
   L.target.resize(n);
   for (int v = 0; v < n; ++v) {
-    L.target[v] = mesh.boundary[v] ? mesh.boundaryTangent[v] : mesh.frame[v].t;
+    L.target[v] = L.fixed[v] ? mesh.boundaryTangent[v] : mesh.frame[v].t;
     if (!(norm(L.target[v]) > 0.5)) L.target[v] = mesh.frame[v].t, L.fixed[v] = 0;
   }
   L.start = mesh.start;

@@ -119,7 +119,7 @@ struct Level {
   std::vector<int> parent;       // #x: its vertex on the next coarser level (empty on the coarsest)
   int size() const { return static_cast<int>(x.size()); }
 };
-std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& scale);
+std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& scale, bool freeAlignedBoundary = true);
 
 // Vertices per thread in the sweeps (each costs about a microsecond).
 constexpr int kSweepGrain = 1024;

@@ -116,7 +116,7 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       FieldMesh m = fieldMesh(surface, cell / samples, options.anisotropy, options.curvatureFloor, cancel);
       std::vector<double> scale = cellScale(m, options.curvatureSizing);
       report(0.1, "direction field");
-      std::vector<Level> levels = hierarchy(m, scale);
+      std::vector<Level> levels = hierarchy(m, scale, options.freeAlignedBoundary);
       std::vector<std::vector<Vec3>> fields = orientationField(levels, options.alignment, progress, cancel);
       const std::vector<double> integrable = integrableScale(m, fields[0], 1.0);
       for (int v = 0; v < m.vertexCount(); ++v) scale[v] *= integrable[v];
