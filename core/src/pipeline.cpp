@@ -234,7 +234,14 @@ double triangleSize(const TriMesh& mesh) {
 // upload, whose sharpest turns are its faceting's (PH-CPF's car, genus-3 model and intersection shell: 77, 174 and 143
 // edges turning by over 30 degrees, up to 48-69, scattered over the mesh). Refined, they reach a P-Hex mesh at
 // 10000 faces where their facets stalled every lay (METHOD.md).
-bool creased(const MeshSurface& mesh) { return mesh.creases().sharp() && !(mesh.noise() > MeshSurface::kNoisyMesh); }
+bool creased(const MeshSurface& mesh) { return mesh.creases().sharp() && !noisyUpload(mesh); }
+
+// Whether the repairs that trade hexagons for cuts on a noisy upload apply on `surface` (the solver's fairness, the
+// rounds' changes at folded boundary panels, the dislocation glides): on any surface but a noisy upload, and on that
+// too where PipelineParams::noisyRepairs asks for them (its second lay, withNoisyRepairs).
+bool smoothRepairs(const PipelineParams& params, const Surface& surface) {
+  return params.noisyRepairs || !noisyUpload(surface);
+}
 
 // How finely to refine `mesh`, whose triangles are of `size` (triangleSize), for `cell` (1: not at all).
 // Neither a plane (nothing to smooth) nor a mesh with a sharp crease (which the jets would round off: it gets
@@ -354,7 +361,7 @@ GlobalOptions globalOptions(const PipelineParams& p, double cell, const Surface*
   o.curvatureFloor = p.curvatureFloor;
   // Dislocations glided together only where the surface is smooth, unless asked: on the noisy shared models (20
   // runs) they gave 1.7-2.4 points more hexagons but cut 114 -> 122-155 interior faces, none converging either way.
-  o.glideDislocations = p.noisyRepairs || !surface || !noisyUpload(*surface);
+  o.glideDislocations = !surface || smoothRepairs(p, *surface);
   o.freeAlignedBoundary = !surface || !noisyUpload(*surface);
   return o;
 }
@@ -805,7 +812,7 @@ namespace {
 // noisy shared models it turned stalls into convergence by cutting many faces (3holes at 3000 faces: 4 -> 48 cut,
 // 88.6 -> 78.9 % hexagons; six_s0 at 5000: 9 -> 406; METHOD.md), which is not the trade asked for.
 double fairnessFor(const PipelineParams& params, TriangulationMethod method, const Surface& surface) {
-  return method == TriangulationMethod::Global && (params.noisyRepairs || !noisyUpload(surface)) ? params.fairness : 0.0;
+  return method == TriangulationMethod::Global && smoothRepairs(params, surface) ? params.fairness : 0.0;
 }
 
 // The solver's options as the run's parameters ask for them, for a triangulation laid by `method` on `surface`.
@@ -1054,7 +1061,7 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
   const double floor = params.cell > 0 ? 0.0 : kCollapseFloor * params.faces;
   const int budget = t.uv.empty() ? static_cast<int>(std::max(0.0, std::min(kCollapseShare * vertices, vertices - floor))) : 0;
   GeometryCache geometry;  // the vertices' closest points, from one look-up to the next (most vertices stay)
-  const bool panelsToo = params.noisyRepairs || !noisyUpload(surface);  // folded boundary panels as well (kBoundaryFlipFewest)
+  const bool panelsToo = smoothRepairs(params, surface);  // folded boundary panels as well (kBoundaryFlipFewest)
   bool dropping = false;       // the last round: boundary vertices dropped alone (kDropEven)
   std::vector<int> keptPanels;  // the folded panels of the round kept, by face of keptDual
   // A round not kept that the next goes on from (kFoldPatience), else (fromKept) the round kept.
@@ -1645,7 +1652,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
         // of it): their blend would crease where the mesh does not, so the facets are laid as they are. A noisy
         // upload's facets turn sharply themselves: refined where that turns less sharply than they do (PH-CPF's
         // car, genus-3 model and intersection shell: 48 -> 31, 58 -> 40 and 69 -> 53 degrees at 3000 faces).
-        const bool smoother = upload->noise() > MeshSurface::kNoisyMesh && refined->creases().degrees < upload->creases().degrees;
+        const bool smoother = noisyUpload(*upload) && refined->creases().degrees < upload->creases().degrees;
         if (refined->creases().sharp() && !smoother) {
           s << "too coarse to be refined smoothly (the fits around its vertices disagree: the refinement would turn by "
             << std::lround(refined->creases().degrees) << " degrees between neighbouring triangles), so laid on its facets; "
@@ -2946,7 +2953,7 @@ PipelineResult withNoisyRepairs(PipelineResult first, const PipelineParams& para
 
 PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
   PipelineResult first = coveredGlobally(runOnce(params, progress, cancel), params, progress, cancel);
-  const bool noisy = first.surface && noisyUpload(*first.surface) && !params.noisyRepairs;
+  const bool noisy = first.surface && !smoothRepairs(params, *first.surface);
   PipelineResult kept = !params.relay || first.method != TriangulationMethod::Global ? std::move(first)
                         : !noisy                                                 ? relayAndTrials(std::move(first), params, progress, cancel)
                         : reached(first) ? std::move(first)

@@ -432,7 +432,8 @@ export interface RunParams {
    * metric further (anisotropy 2.5, curvature floor 0.05) and the better kept ('on', default). A noisy upload's first
    * lay is laid without the repairs that trade hexagons for cuts there (the fairness, the changes at folded boundary
    * panels, the dislocation glides) and not again this way; where it does not reach a P-Hex mesh, it is laid again
-   * with them, as a smooth upload is (this relay and the trials included), and that lay kept where it reaches one. Under 'auto', an upload whose Method 2 rows leave a point of it over a mean panel edge from any panel,
+   * with them, as a smooth upload is (this relay and the trials included), and that lay kept where it reaches one.
+   * Under 'auto', an upload whose Method 2 rows leave a point of it over a mean panel edge from any panel,
    * cut faces, or reach no P-Hex mesh is tiled by the global method, kept where it reaches one covering the upload
    * more closely or, both within a panel edge, with fewer nodes of four faces from cuts. Then, at up to 5000 faces,
    * where the global lay kept still has nodes of four faces from cuts, it is laid again for 3 % fewer and 3 % more
