@@ -125,6 +125,7 @@ phex::PipelineParams paramsFromJs(const val& o) {
   if (has(o, "clipBoundary")) p.clipBoundary = switchValue(o, "clipBoundary", "on", "off");
   if (has(o, "anisotropy")) p.anisotropy = number(o, "anisotropy");
   if (has(o, "foldFlips")) p.foldFlips = switchValue(o, "foldFlips", "on", "off");
+  if (has(o, "dislocations")) p.cancelDislocations = switchValue(o, "dislocations", "cancel", "keep");
   if (has(o, "alignment")) p.alignment = number(o, "alignment");
   if (has(o, "curvatureSizing")) p.curvatureSizing = number(o, "curvatureSizing");
   if (has(o, "curvatureFloor")) p.curvatureFloor = number(o, "curvatureFloor");
@@ -371,7 +372,7 @@ val capabilities() {
   for (const char* f : {"principal", "angle:DEG", "param", "radial", "diverging", "spiral", "section"}) fields.call<void>("push", std::string(f));
   c.set("fields", fields);
   c.set("lowerBound", true);
-  c.set("globalOptions", true);  // anisotropy, alignment, curvatureSizing, curvatureFloor, foldFlips, relay, fairness
+  c.set("globalOptions", true);  // anisotropy, alignment, curvatureSizing, curvatureFloor, foldFlips, dislocations, relay, fairness
   val controls = val::array();
   for (const std::string& n : phex::subdivisionControls()) controls.call<void>("push", n);
   c.set("subdivisionControls", controls);

@@ -363,6 +363,7 @@ GlobalOptions globalOptions(const PipelineParams& p, double cell, const Surface*
   // runs) they gave 1.7-2.4 points more hexagons but cut 114 -> 122-155 interior faces, none converging either way.
   o.glideDislocations = !surface || smoothRepairs(p, *surface);
   o.freeAlignedBoundary = !surface || !noisyUpload(*surface);
+  o.cancelDislocations = p.cancelDislocations;
   return o;
 }
 
@@ -2915,9 +2916,11 @@ PipelineResult relayAndTrials(PipelineResult first, const PipelineParams& params
   return withTrials(std::move(kept), params, laidWith, progress, cancel);
 }
 
-// A noisy upload whose first lay (without the repairs, PipelineParams::noisyRepairs) did not reach a P-Hex mesh,
-// laid again with them as a smooth upload is (relayed and trial lays included); the second kept where it reached
-// one. On the five noisy shared models at 1000, 1500, 3000 and 10000 faces the first lays reached none; the
+// A noisy upload whose first lay (without the repairs, PipelineParams::noisyRepairs) did not reach a P-Hex mesh, or
+// reached one only with nodes of four faces from cuts at over kRelayNodesOfFour of its faces (the six_s0 model at
+// 1500 faces since the dislocations are cancelled: 149 + 44 faces cut), laid again with them as a smooth upload is
+// (relayed and trial lays included); the second kept where it reached one the first did not, or one with fewer
+// nodes of four faces from cuts. On the five noisy shared models at 1000, 1500, 3000 and 10000 faces the first lays reached none; the
 // second 15 of 20 (cutting 0-277 faces; the genus-3 model at 1500 faces 131 and the car at 3000 faces 277, a tenth
 // of its faces), with 2-15 points fewer hexagons where they did (METHOD.md).
 PipelineResult withNoisyRepairs(PipelineResult first, const PipelineParams& params, const ProgressFn& progress,
@@ -2933,17 +2936,21 @@ PipelineResult withNoisyRepairs(PipelineResult first, const PipelineParams& para
                                                 "the first lay is", progress, cancel);
   if (!laid) return first;
   PipelineResult second = relayAndTrials(std::move(*laid), again, progress, cancel);
-  const bool better = reached(second);
+  // Kept where it reaches a P-Hex mesh the first did not, or one with fewer nodes of four faces from cuts.
+  const bool better = reached(second) && (!reached(first) || nodesOfFourCut(second) < nodesOfFourCut(first));
   PipelineResult& kept = better ? second : first;
   PipelineResult::Relay keptRelay = better ? second.relay : relay;
   keptRelay.noisyRepairs = true;
   keptRelay.noisyRepairsKept = better;
   std::ostringstream s;
   s << "the uploaded mesh is noisy, and its first lay, without the solver's fairness, the changes at folded boundary "
-       "panels and the dislocation glides (on noisy meshes they trade hexagons for cuts), did not reach a P-Hex mesh ("
-    << relay.firstNodesOfFour << " nodes of four faces from its cuts); laid again with them, as a smooth upload is, it "
-    << (better ? "reached one with " + std::to_string(nodesOfFourCut(second)) + " nodes of four faces from its cuts: the second is kept"
-               : std::string("did not reach one either: the first is kept"));
+       "panels and the dislocation glides (on noisy meshes they trade hexagons for cuts), "
+    << (reached(first) ? "reached a P-Hex mesh only by cutting faces (" : "did not reach a P-Hex mesh (") << relay.firstNodesOfFour
+    << " nodes of four faces from its cuts); laid again with them, as a smooth upload is, it "
+    << (better                ? "reached one with " + std::to_string(nodesOfFourCut(second)) + " nodes of four faces from its cuts: the second is kept"
+        : reached(second)     ? "reached one with " + std::to_string(nodesOfFourCut(second)) + " nodes of four faces from its cuts: the first is kept"
+        : reached(first)      ? std::string("did not reach one: the first is kept")
+                              : std::string("did not reach one either: the first is kept"));
   kept.triangulation.notes.push_back(s.str());
   keepAfterRelay(kept, first, second, keptRelay);
   return std::move(kept);
@@ -2956,8 +2963,9 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   const bool noisy = first.surface && !smoothRepairs(params, *first.surface);
   PipelineResult kept = !params.relay || first.method != TriangulationMethod::Global ? std::move(first)
                         : !noisy                                                 ? relayAndTrials(std::move(first), params, progress, cancel)
-                        : reached(first) ? std::move(first)
-                                         : withNoisyRepairs(std::move(first), params, progress, cancel);
+                        : reached(first) && nodesOfFourCut(first) <= kRelayNodesOfFour * first.metrics.faceCount
+                            ? std::move(first)
+                            : withNoisyRepairs(std::move(first), params, progress, cancel);
   if (progress) progress({"done", 1, "done"});
   return kept;
 }

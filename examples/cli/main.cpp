@@ -79,6 +79,11 @@ Options of `phex run`:
                             (at most 8 % of them), merge each one's vertex with its neighbour along the
                             flatter principal direction (else flip an edge of its star) and solve again:
                             fewer faces cut later, each cut making two nodes of four faces (default on)
+  --dislocations cancel|keep
+                            global: the lattice's dislocations (a vertex of five next to one of seven)
+                            joined in pairs of opposite sense, moved into a singular point of the field
+                            or out through the boundary before the triangle mesh is extracted: more
+                            hexagons, rows unbroken (default cancel); keep: as the position field leaves them
   --field SPEC              direction field: principal (default; under --method auto the surface's
                             recommended field; on a dome whose curvature lines turn around an umbilic,
                             section), angle:DEG, param, radial, diverging[:DEG], spiral[:DEG],
@@ -260,7 +265,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                  {"duality", phex::dualityName(p.duality)}, {"solver", phex::methodName(p.solver)},
                  {"folds", p.preventFolds ? "prevent" : "allow"}, {"surfaceFit", p.fitSurface ? "on" : "off"},
                  {"splitBoundary", p.splitBoundaryPanels ? "on" : "off"}, {"clipBoundary", p.clipBoundary ? "on" : "off"},
-                 {"foldFlips", p.foldFlips ? "on" : "off"}, {"anisotropy", p.anisotropy}, {"alignment", p.alignment},
+                 {"foldFlips", p.foldFlips ? "on" : "off"},
+                 {"dislocations", p.cancelDislocations ? "cancel" : "keep"}, {"anisotropy", p.anisotropy}, {"alignment", p.alignment},
                  {"curvatureSizing", p.curvatureSizing}, {"curvatureFloor", p.curvatureFloor}, {"relay", p.relay ? "on" : "off"},
                  {"fairness", p.fairness}, {"cutShare", p.cutShare}};
   if (p.start) params["start"] = {p.start->x(), p.start->y(), p.start->z()};
@@ -401,6 +407,7 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--lower-bound") p.lowerBound = parseNumber(a, value());
     else if (a == "--anisotropy") p.anisotropy = parseNumber(a, value());
     else if (a == "--fold-flips") p.foldFlips = parseSwitch(a, value(), "on", "off");
+    else if (a == "--dislocations") p.cancelDislocations = parseSwitch(a, value(), "cancel", "keep");
     else if (a == "--relay") p.relay = parseSwitch(a, value(), "on", "off");
     else if (a == "--curvature-floor") p.curvatureFloor = parseNumber(a, value());
     else if (a == "--fairness") p.fairness = parseNumber(a, value());

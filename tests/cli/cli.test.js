@@ -101,6 +101,7 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--split-boundary', 'maybe'], /--split-boundary must be on or off/],
     [['run', '--clip-boundary', 'sometimes'], /--clip-boundary must be on or off/],
     [['run', '--fold-flips', 'sometimes'], /--fold-flips must be on or off/],
+    [['run', '--dislocations', 'some'], /--dislocations must be cancel or keep/],
     [['run', '--relay', 'twice'], /--relay must be on or off/],
     [['run', '--fairness', '2'], /fairness must be in \[0, 1\]/],
     [['run', '--cut-share', '1.5'], /cutShare must be in \[0, 1\]/],

@@ -705,9 +705,13 @@ TEST_CASE("pipeline: a larger cut share gives a planar mesh where the default le
 
 namespace {
 // The botanic-garden bubble laid by the global method at `faces`, the alignment, anisotropy and fairness given.
+// (The cases below were chosen, by scans, on the lattice as the position field leaves it: they lay it so,
+// `cancelDislocations` off, to test their mechanisms where those act.)
 PipelineResult bubbleGlobal(int faces, double alignment = PipelineParams().alignment,
-                            double anisotropy = PipelineParams().anisotropy, double fairness = PipelineParams().fairness) {
+                            double anisotropy = PipelineParams().anisotropy, double fairness = PipelineParams().fairness,
+                            bool cancelDislocations = false) {
   PipelineParams p;
+  p.cancelDislocations = cancelDislocations;
   p.mesh = upload("directional_botanic-garden-bubble.off");
   p.method = TriangulationMethod::Global;
   p.faces = faces;
@@ -909,6 +913,7 @@ TEST_CASE("pipeline: where the global lay's cuts leave nodes of four faces, tria
   p.method = TriangulationMethod::Global;
   p.faces = 1000;
   p.relay = false;
+  p.cancelDislocations = false;  // the case was chosen on the lattice as the position field leaves it
   const PipelineResult once = runPipeline(p);
   const int onceFour = 2 * once.interiorFacesSplit + once.boundaryPanelsSplit;
   REQUIRE(onceFour > 0);
@@ -964,8 +969,9 @@ TEST_CASE("pipeline: a noisy upload that falls short is laid again with the repa
   CHECK(r.totalMilliseconds > once.totalMilliseconds);  // both lays' time
 }
 
-// PH-CPF's open annulus at 1500 faces: its first lay stalls (planarity 6e-3, 4 + 9 faces cut); laid again with the
-// repairs it reaches a P-Hex mesh (measured: none cut, 84 % hexagons).
+// PH-CPF's open annulus at 1500 faces: its first lay reaches a P-Hex mesh only by cutting 149 interior faces and 44
+// boundary panels (before the dislocations were cancelled it stalled, planarity 6e-3); laid again with the repairs it
+// reaches one with 1 + 1 cut (measured: 87 % hexagons).
 TEST_CASE("pipeline: a noisy shared model reaches a P-Hex mesh laid again with the repairs of a smooth upload") {
   PipelineParams p;
   p.mesh = upload("phcpf_six_s0.off");
@@ -980,9 +986,11 @@ TEST_CASE("pipeline: a noisy shared model reaches a P-Hex mesh laid again with t
   CHECK(r.farNodes == 0);
   CHECK(std::abs(r.metrics.faceCount - p.faces) <= 0.1 * p.faces);
   CHECK(2 * r.interiorFacesSplit + r.boundaryPanelsSplit <= r.metrics.faceCount / 50);
-  // The same lay with the repairs asked from the start, without the relay: only the first lay, and it stalls.
+  // The same lay with the repairs asked from the start, without the relay: only the first lay, which stalls or
+  // cuts faces making nodes of four at over 5 % of its faces.
   p.relay = false;
-  CHECK_FALSE(runPipeline(p).solve.converged);
+  const PipelineResult once = runPipeline(p);
+  CHECK((!once.solve.converged || 2 * once.interiorFacesSplit + once.boundaryPanelsSplit > once.metrics.faceCount / 20));
   p.noisyRepairs = true;
   const PipelineResult repaired = runPipeline(p);
   CHECK(repaired.solve.converged);
@@ -1200,7 +1208,15 @@ TEST_CASE("global triangulation: a near-developable surface's rows run to its bo
   const double fixed = checkTriangulation(globalTriangulation(*dome, o), *dome).regularFraction;
   INFO("interior vertices of valence 6: boundary free " << free << ", fixed " << fixed);
   CHECK(free >= 0.97);
-  CHECK(free >= fixed + 0.02);
+  CHECK(free > fixed);
+  // The lattice as the position field leaves it (dislocations kept), where the bent rows' ends stay as 5-7 pairs:
+  // measured 98.5 % against 95.9 % (with them cancelled 98.9 % against 98.1 %).
+  o.cancelDislocations = false;
+  const double fixedKept = checkTriangulation(globalTriangulation(*dome, o), *dome).regularFraction;
+  o.freeAlignedBoundary = true;
+  const double freeKept = checkTriangulation(globalTriangulation(*dome, o), *dome).regularFraction;
+  INFO("dislocations kept: boundary free " << freeKept << ", fixed " << fixedKept);
+  CHECK(freeKept >= fixedKept + 0.02);
   // The pipeline: a planar mesh, nothing cut, covering the dome to its clipped boundary.
   PipelineParams p;
   p.surface = "elliptic-paraboloid";
@@ -1214,4 +1230,45 @@ TEST_CASE("global triangulation: a near-developable surface's rows run to its bo
   CHECK(r.interiorFacesSplit + r.boundaryPanelsSplit == 0);
   CHECK(r.interiorHexagonFraction >= 0.97);
   CHECK(r.coverageGap <= kCoverageGapGoal);
+}
+
+// The torus' lattice needs no dislocation (a lattice along the parallels with as many points on each closes up),
+// but the position field leaves some: 5-7 pairs where the sweeps settled, rows wandering over them. Cancelled before
+// the extraction (GlobalOptions::cancelDislocations), the cores are joined in pairs and the field left has none:
+// the same cancellation on it finds nothing to do.
+TEST_CASE("global lattice: the position field's dislocations on the torus are cancelled in pairs, none left") {
+  const auto torus = makeSurface("torus");
+  const double cell = 0.08;
+  const global::FieldMesh m = global::fieldMesh(*torus, cell / 2.6, 1.5, 0.25, nullptr);
+  std::vector<double> scale(m.vertexCount(), 1.0);
+  std::vector<global::Level> levels = global::hierarchy(m, scale);
+  std::vector<std::vector<Vec3>> fields = global::orientationField(levels, 1.0, {}, nullptr);
+  const std::vector<double> integrable = global::integrableScale(m, fields[0], 1.0);
+  for (int v = 0; v < m.vertexCount(); ++v) scale[v] *= integrable[v];
+  global::setScale(levels, scale);
+  std::vector<Vec3> o = global::positionField(levels, fields, cell, {}, nullptr);
+  int left = -1;
+  const int cancelled = global::cancelDislocations(m, levels[0], fields[0], o, cell, &left, nullptr);
+  INFO(cancelled << " cores cancelled, " << left << " left");
+  CHECK(cancelled >= 5);
+  CHECK(left == 0);
+  int again = -1;
+  CHECK(global::cancelDislocations(m, levels[0], fields[0], o, cell, &again, nullptr) == 0);
+  CHECK(again == 0);
+}
+
+// The triangulation extracted from it: on the torus at 3000 faces every vertex of valence 6, where the field as the
+// sweeps left it has dislocations along the tube (measured: 100 % against 98.0 % of valence 6, 0 against 60
+// irregular vertices).
+TEST_CASE("global triangulation: with the dislocations cancelled the torus' lattice is nearly all of valence 6") {
+  const auto torus = makeSurface("torus");
+  GlobalOptions o = atFaces(3000);
+  const double cancelled = checkTriangulation(globalTriangulation(*torus, o), *torus).regularFraction;
+  o.cancelDislocations = false;
+  const double kept = checkTriangulation(globalTriangulation(*torus, o), *torus).regularFraction;
+  INFO("interior vertices of valence 6: dislocations cancelled " << cancelled << ", kept " << kept);
+  CHECK(cancelled >= 0.99);
+  CHECK(cancelled >= kept + 0.01);
+  CHECK(PipelineParams().cancelDislocations);
+  CHECK(GlobalOptions().cancelDislocations);
 }

@@ -24,6 +24,8 @@ test("the API offers method 'global' and documents its options with their defaul
   }
   assert.deepEqual([spec.foldFlips.default, spec.foldFlips.values, spec.foldFlips.requires], ['on', ['on', 'off'], 'globalOptions']);
   assert.match(spec.foldFlips.description, /global/);
+  assert.deepEqual([spec.dislocations.default, spec.dislocations.values, spec.dislocations.requires], ['cancel', ['cancel', 'keep'], 'globalOptions']);
+  assert.match(spec.dislocations.description, /global/);
   assert.deepEqual([spec.relay.default, spec.relay.values, spec.relay.requires], ['on', ['on', 'off'], 'globalOptions']);
   assert.match(spec.relay.description, /global/);
 });
@@ -165,6 +167,7 @@ test("the global method's options out of range reject with a PHexError naming th
     [{ curvatureSizing: 1.5 }, /curvatureSizing/],
     [{ curvatureSizing: -0.1 }, /curvatureSizing/],
     [{ foldFlips: 'sometimes' }, /foldFlips/],
+    [{ dislocations: 'some' }, /dislocations/],
     [{ curvatureFloor: 0 }, /curvatureFloor/],
     [{ curvatureFloor: 1.5 }, /curvatureFloor/],
     [{ curvatureFloor: Number.NaN }, /curvatureFloor/],
@@ -228,6 +231,17 @@ test("foldFlips reaches the core: on the torus the notes say how many vertices w
   const plain = await phex.run({ surface: 'torus', faces: 3000, method: 'global', foldFlips: 'off' });
   assert.ok(!plain.triangulation.notes.some((n) => /faces crossing themselves \(each such face would otherwise be cut/.test(n)), 'none when off');
   assert.ok(r.solve.interiorFacesSplit < plain.solve.interiorFacesSplit, `${r.solve.interiorFacesSplit} cut, ${plain.solve.interiorFacesSplit} without flips`);
+});
+
+test("dislocations reaches the core: on the torus the note counts the cancelled ones, and 'keep' leaves more irregular vertices", async () => {
+  // (Laid once, foldFlips off: the lattice as extracted, before the rounds against folds merge vertices.)
+  const options = { surface: 'torus', faces: 3000, method: 'global', relay: 'off', foldFlips: 'off' };
+  const r = await phex.run(options);
+  assert.ok(r.triangulation.notes.some((n) => /[1-9][0-9]* dislocations of the lattice cancelled before extraction \(0 left\)/.test(n)), r.triangulation.notes.join('\n'));
+  const kept = await phex.run({ ...options, dislocations: 'keep' });
+  assert.ok(!kept.triangulation.notes.some((n) => /dislocations of the lattice cancelled/.test(n)), 'no note when kept');
+  assert.ok(r.metrics.interiorHexagonFraction >= kept.metrics.interiorHexagonFraction + 0.02,
+    `${r.metrics.interiorHexagonFraction} cancelled, ${kept.metrics.interiorHexagonFraction} kept`);
 });
 
 test("relay reaches the core: an upload whose Method 2 rows leave a spot bare is tiled again by the global method", async () => {

@@ -387,6 +387,13 @@ export interface RunParams {
    */
   foldFlips?: 'on' | 'off';
   /**
+   * Method 'global': the lattice's dislocations (a vertex of five next to one of seven, where the position field
+   * adds or drops a half row) cancelled before the triangle mesh is extracted, each joined with one of the
+   * opposite sense, moved into a singular point of the field or out through the boundary ('cancel', default:
+   * more hexagons, rows that run on unbroken); 'keep': the lattice as the position field leaves it.
+   */
+  dislocations?: 'cancel' | 'keep';
+  /**
    * Triangulation method: 'auto' (default: the surface's recommended method, `SurfaceSpec.method`;
    * for an uploaded mesh 'prespecified' where trial lays find one system of rows covering it and its lay leaves no part bare, else 'global'; §7's geodesic route for a closed convex one, 'subdivision' for a closed convex polyhedron of fewer vertices than the faces asked for), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
    * conjugation along `field` (Method 2), 'subdivision' (Loop subdivision of a convex control mesh, §7:
@@ -453,7 +460,7 @@ export interface RunParams {
 
 /** A run parameter as listed in {@link PARAMETERS}. */
 export interface ParameterSpec {
-  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'cutShare' | 'clipBoundary' | 'foldFlips' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing' | 'curvatureFloor' | 'relay' | 'fairness';
+  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'cutShare' | 'clipBoundary' | 'foldFlips' | 'dislocations' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing' | 'curvatureFloor' | 'relay' | 'fairness';
   /** 'point': an [x, y, z] array, or null for the default. */
   type: 'integer' | 'number' | 'enum' | 'field' | 'point';
   default: number | string | null;
@@ -485,7 +492,7 @@ export interface Capabilities {
   fields: string[];
   /** `lowerBound` is accepted. */
   lowerBound: boolean;
-  /** The options of method 'global' (`anisotropy`, `alignment`, `curvatureSizing`, `curvatureFloor`, `foldFlips`, `relay`, `fairness`) are accepted. */
+  /** The options of method 'global' (`anisotropy`, `alignment`, `curvatureSizing`, `curvatureFloor`, `foldFlips`, `dislocations`, `relay`, `fairness`) are accepted. */
   globalOptions: boolean;
   /** {@link PHex.surfacePreview} is available. */
   surfacePreview: boolean;

@@ -15,7 +15,8 @@ namespace phex {
 //     circle, its anisotropy bounded where it degenerates), one direction along the principal direction of
 //     least |curvature| where the curvature is anisotropic, along the boundary where there is one; its
 //     singular points (index +-1/6) come out of the optimization (field.cpp);
-//  2. a triangular lattice along it at the asked cell, as a position field (lattice.cpp);
+//  2. a triangular lattice along it at the asked cell, as a position field (lattice.cpp), its dislocations
+//     cancelled in pairs, into the field's singular points or out through the boundary (dislocations.cpp);
 //  3. the lattice's points as the vertices of a triangle mesh, connected by their Voronoi regions on the
 //     surface, boundary vertices on the boundary curves (extraction.cpp).
 // A triangle equilateral in the Dupin frame is ideal where K > 0 (its Dupin centre is its centroid, §5.1) and
@@ -47,6 +48,11 @@ struct GlobalOptions {
   // Whether the lattice's dislocations (a vertex of 5 next to one of 7) are glided together by edge flips and
   // cancelled (on by default; the pipeline leaves it off for a noisy upload's first lay, PipelineParams::noisyRepairs).
   bool glideDislocations = true;
+  // Whether the position field's dislocations are cancelled before the extraction (dislocations.cpp): each core
+  // joined with one of the opposite Burgers vector, moved into a singular point of the field or out through the
+  // boundary, and the lattice solved again around the changed translations. Irregular vertices then stand at the
+  // field's singular points, the boundary, and the few cores left. On by default.
+  bool cancelDislocations = true;
   // On a surface whose field is held to the flatter principal direction over most of it (a near-developable), the
   // boundary left free where that hold is strong, so that rows run along the flatter direction to the boundary
   // and end there cleanly instead of bending along it (on by default; the pipeline leaves it off on a noisy

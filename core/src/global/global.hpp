@@ -181,6 +181,11 @@ std::vector<double> integrableScale(const FieldMesh& mesh, const std::vector<Vec
 std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vector<Vec3>>& fields, double cell,
                                 const ProgressFn& progress, const CancelFlag* cancel);
 
+// The position field's dislocations cancelled (dislocations.cpp): returns how many cores were joined with another,
+// moved into a singular point or out through the boundary; `left` gets those left.
+int cancelDislocations(const FieldMesh& mesh, const Level& level, const std::vector<Vec3>& q, std::vector<Vec3>& o,
+                       double cell, int* left, const CancelFlag* cancel);
+
 // The lattice's points as a triangle mesh: sites from the position field, boundary sites along the boundary
 // loops, connected as the dual of their Voronoi regions on the field mesh. Notes say what was done.
 struct Extraction {

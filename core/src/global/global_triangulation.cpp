@@ -127,14 +127,20 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       // asked for by more than kCountMiss; the closest is kept.
       Extraction best;
       double bestMiss = std::numeric_limits<double>::infinity(), bestCell = laid;
+      int bestCancelled = 0, bestLeft = 0;
       for (int attempt = 0; attempt < 3; ++attempt) {
         report(0.3 + 0.1 * attempt, "lattice");
-        const std::vector<Vec3> o = positionField(levels, fields, laid, progress, cancel);
+        std::vector<Vec3> o = positionField(levels, fields, laid, progress, cancel);
+        int cancelled = 0, left = 0;
+        if (options.cancelDislocations) {
+          report(0.5 + 0.1 * attempt, "dislocations");
+          cancelled = cancelDislocations(m, levels[0], fields[0], o, laid, &left, cancel);
+        }
         report(0.5 + 0.1 * attempt, "extraction");
         Extraction ex = extractTriangulation(surface, m, o, scale, laid, cancel);
         const double count = std::max(1.0, static_cast<double>(ex.mesh.V.rows()));
         const double miss = options.faces > 0 ? std::max(count / options.faces, options.faces / count) : 1.0;
-        if (miss < bestMiss) bestMiss = miss, best = std::move(ex), bestCell = laid;
+        if (miss < bestMiss) bestMiss = miss, best = std::move(ex), bestCell = laid, bestCancelled = cancelled, bestLeft = left;
         if (options.faces <= 0 || bestMiss <= kCountMiss) break;
         laid *= std::sqrt(count / options.faces);
       }
@@ -177,6 +183,8 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       if (m.thinnedFrom > 0)
         s << " (the upload's " << m.thinnedFrom << " vertices, finer or more uneven than the field needs, remeshed to "
           << m.thinnedTo << " at its edge)";
+      if (options.cancelDislocations)
+        s << "; " << bestCancelled << " dislocations of the lattice cancelled before extraction (" << bestLeft << " left)";
       s << "; " << flips << " edges flipped towards valence 6";
       t.notes.push_back(s.str());
       for (std::string& note : best.notes) t.notes.push_back(std::move(note));
