@@ -52,7 +52,7 @@ function nodeFaces({ positions, faceOffsets, faceIndices }) {
 }
 
 /** Σ (6 − corners) over the faces of a polygon mesh: 12 (1 − g) for a closed one whose nodes all join three faces (Euler). */
-function hexagonDefect({ faceOffsets }) {
+export function hexagonDefect({ faceOffsets }) {
   let sum = 0;
   for (let f = 0; f + 1 < faceOffsets.length; f++) sum += 6 - (faceOffsets[f + 1] - faceOffsets[f]);
   return sum;
