@@ -49,17 +49,17 @@ bool isZero(const Int2& a) { return a[0] == 0 && a[1] == 0; }
 // One of the six shortest lattice vectors: +-U, +-V, +-(U - V).
 bool isUnit(const Int2& a) { return std::abs(a[0]) + std::abs(a[1]) == 1 || (a[0] == -a[1] && std::abs(a[0]) == 1); }
 
-// A vertex's lattice: its edge vectors U, V in space and the inverse of their Gram matrix.
+// A vertex's lattice (latticeAt) with its normal.
 struct Basis {
-  Vec3 U, V, n;
-  double i00 = 0, i01 = 0, i11 = 0;
+  Lattice lat;
+  Vec3 n;
   // The lattice coordinates of w's tangential part.
   Vec2 coords(const Vec3& w) const {
     const Vec3 t = w - dot(w, n) * n;
-    const double du = dot(U, t), dv = dot(V, t);
-    return Vec2(i00 * du + i01 * dv, i01 * du + i11 * dv);
+    const double du = dot(lat.U, t), dv = dot(lat.V, t);
+    return Vec2(lat.i00 * du + lat.i01 * dv, lat.i01 * du + lat.i11 * dv);
   }
-  Vec3 vector(const Int2& c) const { return double(c[0]) * U + double(c[1]) * V; }
+  Vec3 vector(const Int2& c) const { return double(c[0]) * lat.U + double(c[1]) * lat.V; }
 };
 
 // The angle of (x, y) in turns, in (-1/2, 1/2], from +, -, *, / alone (libm's atan2 may differ between platforms in
@@ -77,17 +77,11 @@ double turns(double y, double x) {
   return r / (2 * kPi);
 }
 
-// The integer point nearest (a, b) in the lattice's own metric (a^2 + ab + b^2), of the four around it.
+// The integer point nearest (a, b) in the lattice's own metric (nearestCorner).
 Int2 roundLattice(const Vec2& c) {
-  const double a0 = std::floor(c.x()), b0 = std::floor(c.y());
-  Int2 best{0, 0};
-  double bestCost = std::numeric_limits<double>::infinity();
-  for (int da = 0; da < 2; ++da)
-    for (int db = 0; db < 2; ++db) {
-      const double ea = c.x() - (a0 + da), eb = c.y() - (b0 + db), cost = ea * ea + ea * eb + eb * eb;
-      if (cost < bestCost) bestCost = cost, best = {static_cast<int>(a0) + da, static_cast<int>(b0) + db};
-    }
-  return best;
+  double a, b;
+  nearestCorner(c.x(), c.y(), a, b);
+  return {static_cast<int>(a), static_cast<int>(b)};
 }
 
 // Breadth-first reaches, in steps between neighbouring field-mesh triangles (about five a cell), of the searches
@@ -123,7 +117,7 @@ class Dislocations {
           const int hi = m.adjacent[k];
           if (hi < lo) continue;
           const Basis b = basis(hi);
-          const Int2 u = roundLattice(a.coords(b.U)), v = roundLattice(a.coords(b.V));
+          const Int2 u = roundLattice(a.coords(b.lat.U)), v = roundLattice(a.coords(b.lat.V));
           const Int22 t{u[0], v[0], u[1], v[1]};  // columns: hi's U and V in lo's coordinates
           for (int r = 0; r < 6; ++r)
             if (kTurns[r] == t) turn_[k] = static_cast<signed char>(r);
@@ -180,21 +174,14 @@ class Dislocations {
   }
 
  private:
-  Basis basis(int v) const {
-    const Frame& f = L_.frame[v];
-    const double h = cell_ * L_.scale[v];
-    Basis b;
-    b.U = h * f.fromDupin(Q_[v]), b.V = h * f.fromDupin(rotate60(Q_[v], f.n)), b.n = f.n;
-    const double uu = dot(b.U, b.U), uv = dot(b.U, b.V), vv = dot(b.V, b.V), det = uu * vv - uv * uv;
-    if (det > 0) b.i00 = vv / det, b.i01 = -uv / det, b.i11 = uu / det;
-    return b;
+  Basis basis(int v) const { return {latticeAt(L_, Q_, v, cell_), L_.frame[v].n}; }
+  // The entry of neighbour `other` in vertex `row`'s row of the compressed adjacency.
+  int entryIn(int row, int other) const {
+    const auto first = m_.adjacent.begin() + m_.start[row], last = m_.adjacent.begin() + m_.start[row + 1];
+    return static_cast<int>(std::lower_bound(first, last, other) - m_.adjacent.begin());
   }
-  // The entry of edge (a, b) in the row of its lower end.
-  int entry(int a, int b) const {
-    const int lo = std::min(a, b), hi = std::max(a, b);
-    const auto first = m_.adjacent.begin() + m_.start[lo], last = m_.adjacent.begin() + m_.start[lo + 1];
-    return static_cast<int>(std::lower_bound(first, last, hi) - m_.adjacent.begin());
-  }
+  // The entry of edge (a, b) in the row of its lower end, where its turn and translation are kept.
+  int entry(int a, int b) const { return entryIn(std::min(a, b), std::max(a, b)); }
   // (a <- b): b's coordinates into a's, for entry k of edge (a, b).
   Int22 into(int a, int b, int k) const { return a < b ? kTurns[turn_[k]] : kTurns[(6 - turn_[k]) % 6]; }
   // shift(a -> b) in a's coordinates as a matrix times the stored shift(lo -> hi): the identity, or (hi <- lo)
@@ -239,15 +226,13 @@ class Dislocations {
   // across k.
   Int2 takeOff(int f, int k, const Int2& b) const { return times(inverse(effect(f, edgeOf(f, k))), negated(b)); }
 
-  // The rings solved again around a path's changed edges: about its length in field-mesh edges (a dipole's strain
-  // reaches about as far as the two cores are apart), kNearestRings at least, kResolveRings at most.
-  static int ringsFor(const std::vector<std::pair<int, int>>& path) {
-    return std::clamp(static_cast<int>(path.size()) / 2 + 2, kNearestRings, kResolveRings);
-  }
   // The changes along `path` (triangle left, entry crossed), from the core on: each takes the core's vector off the
-  // triangle it leaves. Marks the changed edges' ends for the solve, `rings` around them.
-  void apply(const std::vector<std::pair<int, int>>& path, int rings) {
+  // triangle it leaves. Marks the changed edges' ends for the solve, with the rings around them solved again: about
+  // the path's length in field-mesh edges (a dipole's strain reaches about as far as the two cores are apart),
+  // kNearestRings at least, kResolveRings at most.
+  void apply(const std::vector<std::pair<int, int>>& path) {
     if (path.empty()) return;
+    const int rings = std::clamp(static_cast<int>(path.size()) / 2 + 2, kNearestRings, kResolveRings);
     // The core's move as a displacement of the lattice: -b times the winding about the segment from where it was
     // to where it went (seeded below, before the solve).
     Move move;
@@ -261,15 +246,10 @@ class Dislocations {
       const int lo = static_cast<int>(std::upper_bound(m_.start.begin(), m_.start.end(), k) - m_.start.begin()) - 1;
       radius_[lo] = std::max(radius_[lo], rings), radius_[hi] = std::max(radius_[hi], rings);
       move.start.push_back(lo), move.start.push_back(hi);
-      move.edges.push_back(k), move.edges.push_back(reverse(lo, hi));
+      move.edges.push_back(k), move.edges.push_back(entryIn(hi, lo));
     }
     move.to = centroid(across(path.back().first, path.back().second));
     moves_.push_back(std::move(move));
-  }
-  // The entry hi -> lo of edge lo - hi.
-  int reverse(int lo, int hi) const {
-    const auto first = m_.adjacent.begin() + m_.start[hi], last = m_.adjacent.begin() + m_.start[hi + 1];
-    return static_cast<int>(std::lower_bound(first, last, lo) - m_.adjacent.begin());
   }
   Vec3 centroid(int f) const { return (m_.point(m_.F(f, 0)) + m_.point(m_.F(f, 1)) + m_.point(m_.F(f, 2))) / 3; }
 
@@ -369,7 +349,7 @@ class Dislocations {
     std::vector<std::pair<int, int>> path;
     for (int g = end; from_[g] >= 0; g = from_[g]) path.push_back({from_[g], via_[g]});
     std::reverse(path.begin(), path.end());
-    apply(path, ringsFor(path));
+    apply(path);
     core_[f0] = 0;
     if (end != f0 && !singular_[end]) core_[end] = !isZero(burgers(end));
     return 1;
@@ -410,7 +390,7 @@ class Dislocations {
         f = next;
       }
       if (!reached) continue;
-      apply(path, ringsFor(path));
+      apply(path);
       core_[f0] = 0;
       ++cancelled;
     }

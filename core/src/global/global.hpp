@@ -176,6 +176,38 @@ constexpr int kDirectScale = 12000;
 std::vector<double> integrableScale(const FieldMesh& mesh, const std::vector<Vec3>& q, double strength,
                                     int directLimit = kDirectScale);
 
+// The lattice of one vertex of level L: edge vectors U and V = U turned by 60 degrees in the Dupin frame, of the cell
+// times its scale there, and the inverse of their Gram matrix (for the coordinates of a point in that basis).
+struct Lattice {
+  Vec3 U, V;
+  double i00 = 0, i01 = 0, i11 = 0;
+};
+inline Lattice latticeAt(const Level& L, const std::vector<Vec3>& Q, int v, double cell) {
+  const Frame& f = L.frame[v];
+  const double h = cell * L.scale[v];
+  Lattice lat{h * f.fromDupin(Q[v]), h * f.fromDupin(rotate60(Q[v], f.n))};
+  const double uu = dot(lat.U, lat.U), uv = dot(lat.U, lat.V), vv = dot(lat.V, lat.V), det = uu * vv - uv * uv;
+  if (det > 0) lat.i00 = vv / det, lat.i01 = -uv / det, lat.i11 = uu / det;
+  return lat;
+}
+// The lattice point (ba, bb) nearest lattice coordinates (a, b), by a^2 + ab + b^2 (the squared length of a U + b V in
+// units of the edge): the first of the least of the four corners around them, in the order (a0, b0), (a0 + 1, b0),
+// (a0, b0 + 1), (a0 + 1, b0 + 1), chosen by selects rather than branches (which corner wins is a coin toss for the
+// branch predictor; the position field's sweeps call this for every neighbour).
+[[gnu::always_inline]] inline void nearestCorner(double a, double b, double& ba, double& bb) {
+  const double a0 = std::floor(a), b0 = std::floor(b);
+  auto cost = [&](double ca, double cb) {
+    const double ea = a - ca, eb = b - cb;
+    return ea * ea + ea * eb + eb * eb;
+  };
+  const double a1 = a0 + 1, b1 = b0 + 1;
+  const double c0 = cost(a0, b0), c1 = cost(a1, b0), c2 = cost(a0, b1), c3 = cost(a1, b1);
+  const bool first = !(c1 < c0), third = !(c3 < c2);
+  const double m01 = first ? c0 : c1, m23 = third ? c2 : c3;
+  const bool low = !(m23 < m01);
+  ba = low ? (first ? a0 : a1) : (third ? a0 : a1), bb = low ? b0 : b1;
+}
+
 // The position field: per vertex of level 0, the lattice point nearest to it (a point of its tangent plane) of
 // the triangular lattice of edge cell * scale along the field's directions (Dupin frame).
 std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vector<Vec3>>& fields, double cell,

@@ -14,20 +14,6 @@ constexpr double kFlatHinge = 0.999;
 // the finest, whose points are extracted (16 there and 12 between cost twice the time for 0.2 points of valence 6).
 int sweepsAt(int level, int levels) { return level + 1 == levels ? 30 : level == 0 ? 10 : 5; }
 
-// The lattice of one vertex: edge vectors U and V = U turned by 60 degrees in the Dupin frame, and the inverse of
-// their Gram matrix (for the coordinates of a point in that basis). Fixed while positions are smoothed.
-struct Lattice {
-  Vec3 U, V;
-  double i00 = 0, i01 = 0, i11 = 0;
-};
-Lattice latticeAt(const Level& L, const std::vector<Vec3>& Q, int v, double cell) {
-  const Frame& f = L.frame[v];
-  const double h = cell * L.scale[v];
-  Lattice lat{h * f.fromDupin(Q[v]), h * f.fromDupin(rotate60(Q[v], f.n))};
-  const double uu = dot(lat.U, lat.U), uv = dot(lat.U, lat.V), vv = dot(lat.V, lat.V), det = uu * vv - uv * uv;
-  if (det > 0) lat.i00 = vv / det, lat.i01 = -uv / det, lat.i11 = uu / det;
-  return lat;
-}
 
 // (The three helpers below are inlined by force: called for every neighbour in every sweep, the calls cost more
 // than their arithmetic; the position field's finest level 281 -> 242 ms at 10k faces on one thread.)
@@ -38,20 +24,8 @@ Lattice latticeAt(const Level& L, const std::vector<Vec3>& Q, int v, double cell
 [[gnu::always_inline]] inline Vec3 nearestPoint(const Lattice& lat, const Vec3& o, const Vec3& p) {
   const Vec3 d = p - o;
   const double du = dot(lat.U, d), dv = dot(lat.V, d);
-  const double a = lat.i00 * du + lat.i01 * dv, b = lat.i01 * du + lat.i11 * dv;
-  const double a0 = std::floor(a), b0 = std::floor(b);
-  auto cost = [&](double ca, double cb) {
-    const double ea = a - ca, eb = b - cb;
-    return ea * ea + ea * eb + eb * eb;
-  };
-  // The first of the least (corners in the order (a0, b0), (a0 + 1, b0), (a0, b0 + 1), (a0 + 1, b0 + 1)), chosen
-  // by selects rather than branches: which corner wins is a coin toss for the branch predictor.
-  const double a1 = a0 + 1, b1 = b0 + 1;
-  const double c0 = cost(a0, b0), c1 = cost(a1, b0), c2 = cost(a0, b1), c3 = cost(a1, b1);
-  const bool first = !(c1 < c0), third = !(c3 < c2);
-  const double m01 = first ? c0 : c1, m23 = third ? c2 : c3;
-  const bool low = !(m23 < m01);
-  const double ba = low ? (first ? a0 : a1) : (third ? a0 : a1), bb = low ? b0 : b1;
+  double ba, bb;
+  nearestCorner(lat.i00 * du + lat.i01 * dv, lat.i01 * du + lat.i11 * dv, ba, bb);
   return o + ba * lat.U + bb * lat.V;
 }
 
