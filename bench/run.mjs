@@ -11,7 +11,7 @@
 //   PHEX_NATIVE_BIN, PHEX_PKG_DIR, PHEX_BENCH_OUT  other build dirs than build/native/bin, build/pkg,
 //                             build/bench (for builds outside the repository's build/)
 import { spawnSync } from 'node:child_process';
-import { mkdirSync, writeFileSync, readFileSync, mkdtempSync } from 'node:fs';
+import { mkdirSync, writeFileSync, readFileSync, mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -20,6 +20,7 @@ const repo = fileURLToPath(new URL('..', import.meta.url));
 const cli = join(process.env.PHEX_NATIVE_BIN ?? join(repo, 'build/native/bin'), 'phex');
 const outDir = process.env.PHEX_BENCH_OUT ?? join(repo, 'build/bench');
 const scratch = mkdtempSync(join(tmpdir(), 'phex-bench-'));
+process.on('exit', () => rmSync(scratch, { recursive: true, force: true }));
 const sizes = process.env.PHEX_BENCH_SIZES ? process.env.PHEX_BENCH_SIZES.split(',').map(Number)
   : process.env.PHEX_BENCH_QUICK ? [1000, 10000] : [1000, 10000, 100000];
 const surfaces = (process.env.PHEX_BENCH_SURFACES ?? 'torus,cyclide,wave-roof.obj,freeform.obj').split(',');

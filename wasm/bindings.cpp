@@ -126,6 +126,7 @@ phex::PipelineParams paramsFromJs(const val& o) {
   if (has(o, "anisotropy")) p.anisotropy = number(o, "anisotropy");
   if (has(o, "foldFlips")) p.foldFlips = switchValue(o, "foldFlips", "on", "off");
   if (has(o, "dislocations")) p.cancelDislocations = switchValue(o, "dislocations", "cancel", "keep");
+  if (has(o, "principalField")) p.principalTrial = switchValue(o, "principalField", "try", "off");
   if (has(o, "alignment")) p.alignment = number(o, "alignment");
   if (has(o, "curvatureSizing")) p.curvatureSizing = number(o, "curvatureSizing");
   if (has(o, "curvatureFloor")) p.curvatureFloor = number(o, "curvatureFloor");

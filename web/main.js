@@ -27,7 +27,7 @@ const METHOD_TEXT = {
   global: 'Tiles any surface, uploaded or analytic, of any genus and boundary, along a 6-fold direction field in the Dupin metric: the field places pentagons and heptagons at its singular points (markers in the triangulation view), and every node joins three faces.',
 };
 // Parameters that apply to one method only: their fields show, and are sent, only when it is chosen.
-const METHOD_PARAMS = { global: ['anisotropy', 'alignment', 'curvatureSizing', 'foldFlips', 'dislocations', 'relay'] };
+const METHOD_PARAMS = { global: ['anisotropy', 'alignment', 'curvatureSizing', 'foldFlips', 'dislocations', 'principalField', 'relay'] };
 // Parameters the global method does not read (its field is its own): hidden while it is chosen.
 const NOT_GLOBAL = ['field', 'lowerBound'];
 

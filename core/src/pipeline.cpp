@@ -364,6 +364,7 @@ GlobalOptions globalOptions(const PipelineParams& p, double cell, const Surface*
   o.glideDislocations = !surface || smoothRepairs(p, *surface);
   o.freeAlignedBoundary = !surface || !noisyUpload(*surface);
   o.cancelDislocations = p.cancelDislocations;
+  o.principalTrial = p.principalTrial;
   return o;
 }
 

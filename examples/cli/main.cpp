@@ -81,9 +81,12 @@ Options of `phex run`:
                             fewer faces cut later, each cut making two nodes of four faces (default on)
   --dislocations cancel|keep
                             global: the lattice's dislocations (a vertex of five next to one of seven)
-                            joined in pairs of opposite sense, moved into a singular point of the field
-                            or out through the boundary before the triangle mesh is extracted: more
-                            hexagons, rows unbroken (default cancel); keep: as the position field leaves them
+                            joined in pairs of opposite sense or moved into a singular point of the
+                            field before the triangle mesh is extracted: more hexagons, rows unbroken
+                            (default cancel); keep: as the position field leaves them
+  --principal-field try|off global: also solve the field held to the principal directions wherever the
+                            curvature is anisotropic, and lay it where it has at most three quarters of the
+                            singular points (a cyclide, a torus: surfaces without umbilics; default try)
   --field SPEC              direction field: principal (default; under --method auto the surface's
                             recommended field; on a dome whose curvature lines turn around an umbilic,
                             section), angle:DEG, param, radial, diverging[:DEG], spiral[:DEG],
@@ -219,6 +222,10 @@ double peakMemoryMB() {
 json triangulationJson(const phex::Triangulation& t, const phex::TriangulationCheck& c) {
   json valence = json::object();
   for (const auto& [k, count] : c.interiorValence) valence[std::to_string(k)] = count;
+  // The global method's singular points of the field: where and by how many sixths of a turn it turns about them.
+  json singular = json::array();
+  for (const phex::FieldSingularity& s : t.singularities)
+    singular.push_back({{"position", {s.position.x(), s.position.y(), s.position.z()}}, {"index", s.index}});
   return {{"vertices", t.mesh.V.rows()},
           {"triangles", t.mesh.F.rows()},
           {"interiorVertices", c.interiorVertices},
@@ -228,6 +235,7 @@ json triangulationJson(const phex::Triangulation& t, const phex::TriangulationCh
           {"parabolicStars", c.parabolicStars.size()},
           {"coverage", c.coverage},
           {"systems", t.systems},
+          {"singularities", singular},
           {"edgeLength", {{"min", c.edgeMin}, {"max", c.edgeMax}, {"mean", c.edgeMean}}},
           {"notes", t.notes}};
 }
@@ -266,7 +274,8 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
                  {"folds", p.preventFolds ? "prevent" : "allow"}, {"surfaceFit", p.fitSurface ? "on" : "off"},
                  {"splitBoundary", p.splitBoundaryPanels ? "on" : "off"}, {"clipBoundary", p.clipBoundary ? "on" : "off"},
                  {"foldFlips", p.foldFlips ? "on" : "off"},
-                 {"dislocations", p.cancelDislocations ? "cancel" : "keep"}, {"anisotropy", p.anisotropy}, {"alignment", p.alignment},
+                 {"dislocations", p.cancelDislocations ? "cancel" : "keep"},
+                 {"principalField", p.principalTrial ? "try" : "off"}, {"anisotropy", p.anisotropy}, {"alignment", p.alignment},
                  {"curvatureSizing", p.curvatureSizing}, {"curvatureFloor", p.curvatureFloor}, {"relay", p.relay ? "on" : "off"},
                  {"fairness", p.fairness}, {"cutShare", p.cutShare}};
   if (p.start) params["start"] = {p.start->x(), p.start->y(), p.start->z()};
@@ -408,6 +417,7 @@ int run(const std::vector<std::string>& args, bool triangulateOnly) {
     else if (a == "--anisotropy") p.anisotropy = parseNumber(a, value());
     else if (a == "--fold-flips") p.foldFlips = parseSwitch(a, value(), "on", "off");
     else if (a == "--dislocations") p.cancelDislocations = parseSwitch(a, value(), "cancel", "keep");
+    else if (a == "--principal-field") p.principalTrial = parseSwitch(a, value(), "try", "off");
     else if (a == "--relay") p.relay = parseSwitch(a, value(), "on", "off");
     else if (a == "--curvature-floor") p.curvatureFloor = parseNumber(a, value());
     else if (a == "--fairness") p.fairness = parseNumber(a, value());

@@ -1,13 +1,14 @@
 // The command-line tool, run as a user would: outputs, reports and errors with exit codes.
-import { test } from 'node:test';
+import { after, test } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawnSync } from 'node:child_process';
-import { mkdtempSync, readFileSync, writeFileSync, existsSync } from 'node:fs';
+import { mkdtempSync, readFileSync, rmSync, writeFileSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 
 const PHEX = new URL('../../build/native/bin/phex', import.meta.url).pathname;
 const dir = mkdtempSync(join(tmpdir(), 'phex-cli-'));
+after(() => rmSync(dir, { recursive: true, force: true }));
 
 function phex(...args) {
   return phexWith({}, ...args);
@@ -102,6 +103,7 @@ test('bad input gives a message and exit code 1', () => {
     [['run', '--clip-boundary', 'sometimes'], /--clip-boundary must be on or off/],
     [['run', '--fold-flips', 'sometimes'], /--fold-flips must be on or off/],
     [['run', '--dislocations', 'some'], /--dislocations must be cancel or keep/],
+    [['run', '--principal-field', 'always'], /--principal-field must be try or off/],
     [['run', '--relay', 'twice'], /--relay must be on or off/],
     [['run', '--fairness', '2'], /fairness must be in \[0, 1\]/],
     [['run', '--cut-share', '1.5'], /cutShare must be in \[0, 1\]/],
@@ -293,4 +295,28 @@ test('curvature of an analytic surface is exact', () => {
   assert.equal(phex('curvature', '--surface', 'sphere', '--param', 'R=2', '--faces', '200', '--out', out).code, 0);
   const rows = readFileSync(out, 'utf8').trim().split('\n').slice(1).map((l) => l.split(',').map(Number));
   for (const r of rows) assert.ok(Math.abs(r[3] - 0.5) < 1e-12 && Math.abs(r[4] - 0.5) < 1e-12);
+});
+
+test("the report lists the global field's singular points, their indices adding up to the surface's Euler characteristic", () => {
+  // Poincare-Hopf for a 6-fold field: the indices (sixths of a turn) add up to 6 chi.
+  const cases = [
+    [['--mesh', new URL('../../web/models/phcpf_3holes_r.off', import.meta.url).pathname], 6 * (2 - 2 * 3)],
+    [['--surface', 'torus', '--method', 'global'], 0],
+  ];
+  for (const [args, sum] of cases) {
+    const report = join(dir, 'singular.json');
+    const r = phex('triangulate', ...args, '--faces', '400', '--quiet', '--report', report);
+    assert.equal(r.code, 0, r.err);
+    const { singularities, methodUsed } = JSON.parse(readFileSync(report, 'utf8'));
+    assert.equal(methodUsed, 'global');
+    assert.equal(singularities.reduce((s, x) => s + x.index, 0), sum, JSON.stringify(singularities));
+    for (const s of singularities) {
+      assert.ok([-1, 1].includes(s.index) || Math.abs(s.index) <= 3, `index ${s.index}`);
+      assert.ok(s.position.length === 3 && s.position.every(Number.isFinite));
+    }
+  }
+  // The methods along rows report none.
+  const report = join(dir, 'rows.json');
+  assert.equal(phex('triangulate', '--surface', 'torus', '--method', 'lattice', '--faces', '300', '--quiet', '--report', report).code, 0);
+  assert.deepEqual(JSON.parse(readFileSync(report, 'utf8')).singularities, []);
 });

@@ -26,6 +26,8 @@ test("the API offers method 'global' and documents its options with their defaul
   assert.match(spec.foldFlips.description, /global/);
   assert.deepEqual([spec.dislocations.default, spec.dislocations.values, spec.dislocations.requires], ['cancel', ['cancel', 'keep'], 'globalOptions']);
   assert.match(spec.dislocations.description, /global/);
+  assert.deepEqual([spec.principalField.default, spec.principalField.values, spec.principalField.requires], ['try', ['try', 'off'], 'globalOptions']);
+  assert.match(spec.principalField.description, /global/);
   assert.deepEqual([spec.relay.default, spec.relay.values, spec.relay.requires], ['on', ['on', 'off'], 'globalOptions']);
   assert.match(spec.relay.description, /global/);
 });
@@ -169,6 +171,7 @@ test("the global method's options out of range reject with a PHexError naming th
     [{ curvatureSizing: -0.1 }, /curvatureSizing/],
     [{ foldFlips: 'sometimes' }, /foldFlips/],
     [{ dislocations: 'some' }, /dislocations/],
+    [{ principalField: 'always' }, /principalField/],
     [{ curvatureFloor: 0 }, /curvatureFloor/],
     [{ curvatureFloor: 1.5 }, /curvatureFloor/],
     [{ curvatureFloor: Number.NaN }, /curvatureFloor/],
@@ -195,8 +198,9 @@ test("the global method's options out of range reject with a PHexError naming th
 
 test("relay reaches the core: a surface the first lay leaves unconverged is laid again and converges", async () => {
   // The Dupin cyclide at 2000 faces, without the solver's fairness (with it, the default, the first lay converges):
-  // next to its parabolic circles the first lay follows too little of the Dupin metric.
-  const params = { surface: 'cyclide', faces: 2000, method: 'global', fairness: 0 };
+  // next to its parabolic circles the first lay follows too little of the Dupin metric. (Along the field held to
+  // the principal directions, principalField 'try', the first lay converges: the case lays the smoothest field.)
+  const params = { surface: 'cyclide', faces: 2000, method: 'global', fairness: 0, principalField: 'off' };
   const r = await phex.run(params);
   assert.deepEqual([r.relay.tried, r.relay.kept, r.relay.firstReached, r.relay.anisotropy, r.relay.curvatureFloor], [true, true, false, 2.5, 0.05]);
   assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
@@ -206,6 +210,19 @@ test("relay reaches the core: a surface the first lay leaves unconverged is laid
   assert.equal(once.solve.converged, false, 'the first lay alone stalls');
   const torus = await globalTorus();
   assert.equal(torus.relay.tried, false, 'a lay that reached a P-Hex mesh with few cuts is not laid again');
+});
+
+test("principalField reaches the core: the cyclide's field held to the principal directions has fewer singular points and more hexagons", async () => {
+  const params = { surface: 'cyclide', faces: 2000, method: 'global' };
+  const held = await phex.run(params);
+  const smoothest = await phex.run({ ...params, principalField: 'off' });
+  const held6 = held.triangulation.singularities.index.length, smoothest6 = smoothest.triangulation.singularities.index.length;
+  assert.ok(held6 <= 0.75 * smoothest6, `${held6} against ${smoothest6} singular points`);
+  assert.ok(held.triangulation.notes.some((n) => /held to the principal directions/.test(n)), held.triangulation.notes.join('\n'));
+  assert.ok(!smoothest.triangulation.notes.some((n) => /held to the principal directions/.test(n)));
+  assert.ok(held.solve.converged && held.metrics.planarityMax <= 1e-9);
+  assert.ok(held.metrics.interiorHexagonFraction > smoothest.metrics.interiorHexagonFraction + 0.02,
+    `${held.metrics.interiorHexagonFraction} against ${smoothest.metrics.interiorHexagonFraction}`);
 });
 
 test('trial lays reach the core: where the lay cuts faces, it is laid again for 3 % fewer and more faces and the best kept', async () => {

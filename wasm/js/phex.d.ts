@@ -389,10 +389,17 @@ export interface RunParams {
   /**
    * Method 'global': the lattice's dislocations (a vertex of five next to one of seven, where the position field
    * adds or drops a half row) cancelled before the triangle mesh is extracted, each joined with one of the
-   * opposite sense, moved into a singular point of the field or out through the boundary ('cancel', default:
+   * opposite sense or moved into a singular point of the field ('cancel', default:
    * more hexagons, rows that run on unbroken); 'keep': the lattice as the position field leaves it.
    */
   dislocations?: 'cancel' | 'keep';
+  /**
+   * Method 'global': also solve the direction field held to the principal directions wherever the curvature is
+   * anisotropic, and lay it where it has at most three quarters of the singular points of the field smoothest in
+   * the Dupin metric ('try', default: on surfaces without umbilics, such as a cyclide, fewer singular points and
+   * more hexagons); 'off': the smoothest field alone.
+   */
+  principalField?: 'try' | 'off';
   /**
    * Triangulation method: 'auto' (default: the surface's recommended method, `SurfaceSpec.method`;
    * for an uploaded mesh 'prespecified' where trial lays find one system of rows covering it and its lay leaves no part bare, else 'global'; §7's geodesic route for a closed convex one, 'subdivision' for a closed convex polyhedron of fewer vertices than the faces asked for), 'progressive' conjugation (§5.2 Method 1), 'prespecified'
@@ -460,7 +467,7 @@ export interface RunParams {
 
 /** A run parameter as listed in {@link PARAMETERS}. */
 export interface ParameterSpec {
-  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'cutShare' | 'clipBoundary' | 'foldFlips' | 'dislocations' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing' | 'curvatureFloor' | 'relay' | 'fairness';
+  name: 'faces' | 'cell' | 'tolerance' | 'lambda' | 'mu' | 'maxIterations' | 'duality' | 'solver' | 'folds' | 'surfaceFit' | 'splitBoundary' | 'cutShare' | 'clipBoundary' | 'foldFlips' | 'dislocations' | 'principalField' | 'start' | 'direction' | 'method' | 'field' | 'lowerBound' | 'anisotropy' | 'alignment' | 'curvatureSizing' | 'curvatureFloor' | 'relay' | 'fairness';
   /** 'point': an [x, y, z] array, or null for the default. */
   type: 'integer' | 'number' | 'enum' | 'field' | 'point';
   default: number | string | null;
@@ -492,7 +499,7 @@ export interface Capabilities {
   fields: string[];
   /** `lowerBound` is accepted. */
   lowerBound: boolean;
-  /** The options of method 'global' (`anisotropy`, `alignment`, `curvatureSizing`, `curvatureFloor`, `foldFlips`, `dislocations`, `relay`, `fairness`) are accepted. */
+  /** The options of method 'global' (`anisotropy`, `alignment`, `curvatureSizing`, `curvatureFloor`, `foldFlips`, `dislocations`, `principalField`, `relay`, `fairness`) are accepted. */
   globalOptions: boolean;
   /** {@link PHex.surfacePreview} is available. */
   surfacePreview: boolean;

@@ -16,7 +16,7 @@ namespace phex {
 //     least |curvature| where the curvature is anisotropic, along the boundary where there is one; its
 //     singular points (index +-1/6) come out of the optimization (field.cpp);
 //  2. a triangular lattice along it at the asked cell, as a position field (lattice.cpp), its dislocations
-//     cancelled in pairs, into the field's singular points or out through the boundary (dislocations.cpp);
+//     cancelled in pairs or moved into the field's singular points (dislocations.cpp);
 //  3. the lattice's points as the vertices of a triangle mesh, connected by their Voronoi regions on the
 //     surface, boundary vertices on the boundary curves (extraction.cpp).
 // A triangle equilateral in the Dupin frame is ideal where K > 0 (its Dupin centre is its centroid, §5.1) and
@@ -49,10 +49,18 @@ struct GlobalOptions {
   // cancelled (on by default; the pipeline leaves it off for a noisy upload's first lay, PipelineParams::noisyRepairs).
   bool glideDislocations = true;
   // Whether the position field's dislocations are cancelled before the extraction (dislocations.cpp): each core
-  // joined with one of the opposite Burgers vector, moved into a singular point of the field or out through the
-  // boundary, and the lattice solved again around the changed translations. Irregular vertices then stand at the
-  // field's singular points, the boundary, and the few cores left. On by default.
+  // joined with one of the opposite Burgers vector or moved into a singular point of the field, and the lattice
+  // solved again around the changed translations. Irregular vertices then stand at the field's singular points,
+  // the boundary, and the few cores left. On by default.
   bool cancelDislocations = true;
+  // Whether a second field is solved, held to the flatter principal direction wherever the curvature is
+  // anisotropic (not only where the bounded metric leaves an equilateral triangle invalid) and ten times as
+  // strongly, and the lattice laid along it where it has at most three quarters of the first field's singular
+  // points. The principal directions form a network without singularities on surfaces without umbilics (a
+  // cyclide, a torus), where the smoothest field in the Dupin metric can still turn through pairs of them (the
+  // cyclide: 20 against 4); near umbilics (hill tops, blobs) held fields gain singular points and are not taken.
+  // On by default; not with `alignment` 0.
+  bool principalTrial = true;
   // On a surface whose field is held to the flatter principal direction over most of it (a near-developable), the
   // boundary left free where that hold is strong, so that rows run along the flatter direction to the boundary
   // and end there cleanly instead of bending along it (on by default; the pipeline leaves it off on a noisy

@@ -197,7 +197,8 @@ Vec3 matchDirection(const Vec3& reference, const Frame& b, const Vec3& q, const 
 
 constexpr double kAlignedSurface = 0.5, kAlignedBoundary = 0.5;
 
-std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& scale, bool freeAlignedBoundary) {
+std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& scale, bool freeAlignedBoundary,
+                             const std::vector<double>* holdTo) {
   std::vector<Level> levels(1);
   Level& L = levels[0];
   const int n = mesh.vertexCount();
@@ -205,7 +206,7 @@ std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& s
   for (int v = 0; v < n; ++v) L.x[v] = mesh.point(v);
   L.frame = mesh.frame;
   L.area = mesh.area;
-  L.alignWeight = mesh.alignWeight;
+  L.alignWeight = holdTo ? *holdTo : mesh.alignWeight;
   L.scale = scale;
   L.fixed = mesh.boundary;
   // On a surface whose field is held to the flatter principal direction over most of it (a near-developable: the
@@ -451,6 +452,24 @@ int singularityIndex(const FieldMesh& mesh, const std::vector<Vec3>& q, int i, i
     if (d > bestDot) best = r, bestDot = d;
   }
   return best <= 3 ? best : best - 6;  // -2 .. 3
+}
+
+bool principalTurns(const FieldMesh& mesh, int i, int j, int k) {
+  // The principal directions (a cross: +-t and +-n x t) carried around the triangle as singularityIndex carries q;
+  // the flatter one alone would jump by a quarter turn where |k1| = |k2| on a saddle.
+  auto nearestOfFour = [&](const Vec3& w, int b) {
+    const Vec3& t = mesh.frame[b].t;
+    const Vec3 u = cross(mesh.frame[b].n, t);
+    const double dt = dot(w, t), du = dot(w, u);
+    return std::abs(dt) >= std::abs(du) ? Vec3(dt < 0 ? -t : t) : Vec3(du < 0 ? -u : u);
+  };
+  const int corners[4] = {i, j, k, i};
+  Vec3 carried = mesh.frame[i].t;
+  for (int s = 0; s < 3; ++s) {
+    const int a = corners[s], b = corners[s + 1];
+    carried = nearestOfFour(transport(carried, mesh.frame[a], mesh.frame[b], mesh.point(b) - mesh.point(a)), b);
+  }
+  return dot(carried, mesh.frame[i].t) < 0.5;
 }
 
 }  // namespace phex::global

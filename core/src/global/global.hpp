@@ -85,6 +85,9 @@ struct FieldMesh {
   std::vector<double> area;         // #V: a third of the incident triangles' areas
   std::vector<double> curvature;    // #V: largest |principal curvature|
   std::vector<double> alignWeight;  // #V in [0, 1]: how anisotropic the (bounded) Dupin metric is
+  // #V in [0, 1]: how anisotropic the curvature is (GlobalOptions::principalTrial's weight of the alignment,
+  // taken where larger than alignWeight)
+  std::vector<double> principalWeight;
   std::vector<int> start, adjacent; // vertex adjacency in compressed rows, each row sorted
   std::vector<std::vector<int>> loops;  // boundary loops, vertex ids in order with the surface on the left
   std::vector<char> boundary;       // #V
@@ -119,7 +122,8 @@ struct Level {
   std::vector<int> parent;       // #x: its vertex on the next coarser level (empty on the coarsest)
   int size() const { return static_cast<int>(x.size()); }
 };
-std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& scale, bool freeAlignedBoundary = true);
+std::vector<Level> hierarchy(const FieldMesh& mesh, const std::vector<double>& scale, bool freeAlignedBoundary = true,
+                             const std::vector<double>* holdTo = nullptr);
 
 // Vertices per thread in the sweeps (each costs about a microsecond).
 constexpr int kSweepGrain = 1024;
@@ -162,6 +166,9 @@ Vec3 matchDirection(const Vec3& reference, const Frame& b, const Vec3& q, const 
                     int* turns = nullptr);
 // The index (in sixths of a turn) of the field around triangle (i, j, k) of the field mesh: 0 where it is regular.
 int singularityIndex(const FieldMesh& mesh, const std::vector<Vec3>& q, int i, int j, int k);
+// Whether the principal directions turn by a quarter turn or more around the field-mesh triangle (i, j, k): an
+// umbilic of the surface (or where noise makes the curvature isotropic).
+bool principalTurns(const FieldMesh& mesh, int i, int j, int k);
 
 // Per vertex of the field mesh, the factor of the cell that makes the lattice along the field `q` integrable where
 // it can be (scale.cpp): e^phi with grad phi = -J omega in least squares, omega the field's turn against parallel
@@ -214,7 +221,7 @@ std::vector<Vec3> positionField(std::vector<Level>& levels, std::vector<std::vec
                                 const ProgressFn& progress, const CancelFlag* cancel);
 
 // The position field's dislocations cancelled (dislocations.cpp): returns how many cores were joined with another,
-// moved into a singular point or out through the boundary; `left` gets those left.
+// or moved into a singular point; `left` gets those left.
 int cancelDislocations(const FieldMesh& mesh, const Level& level, const std::vector<Vec3>& q, std::vector<Vec3>& o,
                        double cell, int* left, const CancelFlag* cancel);
 

@@ -41,6 +41,9 @@ constexpr int kCancelMostVertices = 300000;
 // Rounds of fitting the vertices to the field (relax.cpp): on the torus at 3000 faces, from 224 interior faces the
 // solve could not make planar without folding to 72; more rounds changed nothing.
 constexpr int kFitRounds = 3;
+// GlobalOptions::principalTrial: the held field's alignment against the first's, and the share of the first's
+// singular points it may have at most to be kept.
+constexpr double kPrincipalStrength = 10, kPrincipalFewer = 0.75;
 
 // Per fine vertex, the factor of the cell there: 1 for uniform panels; with curvature sizing s, the largest
 // |curvature| over the surface's median to the power -s/2, within [1/3, 3], smoothed over the mesh, and normalized
@@ -124,6 +127,40 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       report(0.1, "direction field");
       std::vector<Level> levels = hierarchy(m, scale, options.freeAlignedBoundary);
       std::vector<std::vector<Vec3>> fields = orientationField(levels, options.alignment, progress, cancel);
+      // Per field-mesh triangle, the index of a field's singular point there (0: none), over threads.
+      auto singularIndices = [&](const std::vector<Vec3>& q) {
+        std::vector<int> indices(m.F.rows());
+        parallelRanges(static_cast<int>(m.F.rows()), kSweepGrain, [&](int begin, int end) {
+          for (int f = begin; f < end; ++f) indices[f] = singularityIndex(m, q, m.F(f, 0), m.F(f, 1), m.F(f, 2));
+        });
+        return indices;
+      };
+      std::vector<int> indices = singularIndices(fields[0]);
+      auto singularCount = [](const std::vector<int>& i) { return i.size() - std::count(i.begin(), i.end(), 0); };
+      // The field held to the principal directions (GlobalOptions::principalTrial), kept where it has clearly
+      // fewer singular points.
+      bool principal = false;
+      std::size_t firstSingular = singularCount(indices);
+      // Around an umbilic the held field turns through at least three singular points of a sixth: not tried where
+      // those would be more than the share kept.
+      std::size_t umbilics = 0;
+      if (options.principalTrial && options.alignment > 0 && firstSingular > 0) {
+        std::vector<char> turns(m.F.rows());
+        parallelRanges(static_cast<int>(m.F.rows()), kSweepGrain, [&](int begin, int end) {
+          for (int f = begin; f < end; ++f) turns[f] = principalTurns(m, m.F(f, 0), m.F(f, 1), m.F(f, 2));
+        });
+        umbilics = std::count(turns.begin(), turns.end(), char(1));
+      }
+      if (options.principalTrial && options.alignment > 0 && firstSingular > 0 && 3 * umbilics <= kPrincipalFewer * firstSingular) {
+        report(0.3, "direction field held to the principal directions");
+        std::vector<double> weights(m.vertexCount());
+        for (int v = 0; v < m.vertexCount(); ++v) weights[v] = std::max(m.alignWeight[v], m.principalWeight[v]);
+        std::vector<Level> held = hierarchy(m, scale, options.freeAlignedBoundary, &weights);
+        std::vector<std::vector<Vec3>> heldFields = orientationField(held, kPrincipalStrength * options.alignment, nullptr, cancel);
+        std::vector<int> heldIndices = singularIndices(heldFields[0]);
+        if (singularCount(heldIndices) <= kPrincipalFewer * firstSingular)
+          levels = std::move(held), fields = std::move(heldFields), indices = std::move(heldIndices), principal = true;
+      }
       const std::vector<double> integrable = integrableScale(m, fields[0], 1.0);
       for (int v = 0; v < m.vertexCount(); ++v) scale[v] *= integrable[v];
       setScale(levels, scale);
@@ -176,10 +213,6 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       fitToField(t.mesh, best.seeds, surface, m, fields[0], scale, bestCell, kFitRounds, cancel);
       // The field's singular points, from the field mesh; the field's directions at the vertices, for display.
       int plus = 0, minus = 0;
-      std::vector<int> indices(m.F.rows());  // per field-mesh triangle, over threads; gathered in order below
-      parallelRanges(static_cast<int>(m.F.rows()), kSweepGrain, [&](int begin, int end) {
-        for (int f = begin; f < end; ++f) indices[f] = singularityIndex(m, fields[0], m.F(f, 0), m.F(f, 1), m.F(f, 2));
-      });
       for (int f = 0; f < m.F.rows(); ++f) {
         const int index = indices[f];
         if (index == 0) continue;
@@ -201,6 +234,10 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       s.precision(4);
       s << "global field: cell " << bestCell << ", " << t.singularities.size() << " singular points (" << plus
         << " sixths of a turn positive, " << minus << " negative) laid on " << m.vertexCount() << " field-mesh vertices";
+      if (principal)
+        s << " (held to the principal directions wherever the curvature is anisotropic: the field smoothest in the "
+             "Dupin metric turned through "
+          << firstSingular << ")";
       if (m.thinnedFrom > 0)
         s << " (the upload's " << m.thinnedFrom << " vertices, finer or more uneven than the field needs, remeshed to "
           << m.thinnedTo << " at its edge)";
