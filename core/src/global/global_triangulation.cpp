@@ -140,18 +140,19 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       // The field held to the principal directions (GlobalOptions::principalTrial), kept where it has clearly
       // fewer singular points.
       bool principal = false;
-      std::size_t firstSingular = singularCount(indices);
-      // Around an umbilic the held field turns through at least three singular points of a sixth: not tried where
-      // those would be more than the share kept.
-      std::size_t umbilics = 0;
-      if (options.principalTrial && options.alignment > 0 && firstSingular > 0) {
+      const std::size_t firstSingular = singularCount(indices);
+      bool trying = options.principalTrial && options.alignment > 0 && firstSingular > 0;
+      if (trying) {
+        // Around an umbilic the held field turns through at least three singular points of a sixth: not tried
+        // where three per field-mesh triangle the principal directions turn about would be more than that share.
         std::vector<char> turns(m.F.rows());
         parallelRanges(static_cast<int>(m.F.rows()), kSweepGrain, [&](int begin, int end) {
           for (int f = begin; f < end; ++f) turns[f] = principalTurns(m, m.F(f, 0), m.F(f, 1), m.F(f, 2));
         });
-        umbilics = std::count(turns.begin(), turns.end(), char(1));
+        const auto umbilics = static_cast<std::size_t>(std::count(turns.begin(), turns.end(), char(1)));
+        trying = 3 * umbilics <= kPrincipalFewer * firstSingular;
       }
-      if (options.principalTrial && options.alignment > 0 && firstSingular > 0 && 3 * umbilics <= kPrincipalFewer * firstSingular) {
+      if (trying) {
         report(0.3, "direction field held to the principal directions");
         std::vector<double> weights(m.vertexCount());
         for (int v = 0; v < m.vertexCount(); ++v) weights[v] = std::max(m.alignWeight[v], m.principalWeight[v]);
