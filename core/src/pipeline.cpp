@@ -258,7 +258,7 @@ int refinementFor(const MeshSurface& mesh, double size, double cell) {
   // Where the field mesh of `smooth` has edges within kFieldEdgeRange of its own, it stands; else of it and up to
   // kRefineChoices finer refinements, the one whose field mesh's edge comes nearest (by ratio), the first of those.
   const double median = mesh.mesh().medianEdgeLength(), edge = globalFieldEdge(mesh, cell);
-  auto away = [&](int k) { return std::abs(std::log(median / (k * globalFieldSplit(mesh, median / k, cell)) / edge)); };
+  auto away = [&](int k) { return std::abs(std::log(median / (k * globalFieldSplit(median / k, edge)) / edge)); };
   if (away(smooth) <= std::log(kFieldEdgeRange)) return smooth;
   int best = smooth;
   for (int k = smooth + 1; k <= std::min(static_cast<int>(most), smooth + kRefineChoices); ++k)

@@ -80,10 +80,10 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
                                   const CancelFlag* cancel = nullptr);
 
 // How many times the global method's field mesh splits each edge of an uploaded mesh whose median edge is `median`
-// (its triangles k x k, before the longest left are bisected), tiled at `cell`: its first try's field-mesh edge,
-// cell / globalSamplesPerCell, reached or a little undershot. The pipeline refines a coarse upload so that this
-// split lands near that edge (refinementFor): the two splits multiply.
-int globalFieldSplit(const Surface& surface, double median, double cell);
+// (its triangles k x k, before the longest left are bisected), for the first try's field-mesh edge `edge`
+// (globalFieldEdge), reached or a little undershot. The pipeline refines a coarse upload so that this split lands
+// near that edge (refinementFor): the two splits multiply.
+int globalFieldSplit(double median, double edge);
 // The global method's field-mesh edges per cell on `surface` at `cell`: 2.6, or 2.3 where that cell gives about 30k
 // faces or more (fewer samples: less time and memory on large meshes, as many hexagons).
 double globalSamplesPerCell(const Surface& surface, double cell);

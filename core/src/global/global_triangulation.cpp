@@ -114,9 +114,7 @@ double globalSamplesPerCell(const Surface& surface, double cell) {
   return faces >= kFewerSamplesFaces ? kFewerSamplesPerCell : kSamplesPerCell;
 }
 double globalFieldEdge(const Surface& surface, double cell) { return cell / globalSamplesPerCell(surface, cell); }
-int globalFieldSplit(const Surface& surface, double median, double cell) {
-  return fieldSplit(median, globalFieldEdge(surface, cell));
-}
+int globalFieldSplit(double median, double edge) { return fieldSplit(median, edge); }
 
 Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& options, const ProgressFn& progress,
                                   const CancelFlag* cancel) {
@@ -142,13 +140,17 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       report(0.1, "direction field");
       std::vector<Level> levels = hierarchy(m, scale, options.freeAlignedBoundary);
       std::vector<std::vector<Vec3>> fields = orientationField(levels, options.alignment, progress, cancel);
-      // Per field-mesh triangle, the index of a field's singular point there (0: none), over threads.
-      auto singularIndices = [&](const std::vector<Vec3>& q) {
-        std::vector<int> indices(m.F.rows());
+      // Per field-mesh triangle (i, j, k), value(i, j, k) over threads (an int: no two threads share a byte).
+      auto perTriangle = [&](auto value) {
+        std::vector<int> out(m.F.rows());
         parallelRanges(static_cast<int>(m.F.rows()), kSweepGrain, [&](int begin, int end) {
-          for (int f = begin; f < end; ++f) indices[f] = singularityIndex(m, q, m.F(f, 0), m.F(f, 1), m.F(f, 2));
+          for (int f = begin; f < end; ++f) out[f] = value(m.F(f, 0), m.F(f, 1), m.F(f, 2));
         });
-        return indices;
+        return out;
+      };
+      // Per field-mesh triangle, the index of a field's singular point there (0: none).
+      auto singularIndices = [&](const std::vector<Vec3>& q) {
+        return perTriangle([&](int i, int j, int k) { return singularityIndex(m, q, i, j, k); });
       };
       std::vector<int> indices = singularIndices(fields[0]);
       auto singularCount = [](const std::vector<int>& i) { return i.size() - std::count(i.begin(), i.end(), 0); };
@@ -160,11 +162,9 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
       if (trying) {
         // Around an umbilic the held field turns through at least three singular points of a sixth: not tried
         // where three per field-mesh triangle the principal directions turn about would be more than that share.
-        std::vector<char> turns(m.F.rows());
-        parallelRanges(static_cast<int>(m.F.rows()), kSweepGrain, [&](int begin, int end) {
-          for (int f = begin; f < end; ++f) turns[f] = principalTurns(m, m.F(f, 0), m.F(f, 1), m.F(f, 2));
-        });
-        const auto umbilics = static_cast<std::size_t>(std::count(turns.begin(), turns.end(), char(1)));
+        const std::vector<int> turns =
+            perTriangle([&](int i, int j, int k) { return static_cast<int>(principalTurns(m, i, j, k)); });
+        const auto umbilics = static_cast<std::size_t>(std::count(turns.begin(), turns.end(), 1));
         trying = 3 * umbilics <= kPrincipalFewer * firstSingular;
       }
       if (trying) {
