@@ -360,9 +360,50 @@ TEST_CASE("global triangulation: a needle triangle is tiled from a field mesh as
   CHECK(countEdges(t.mesh).boundary > 0);
 }
 
-// An upload far finer than the cell (a scan, a marching-cubes mesh) is thinned before its field mesh is laid: about
-// as many vertices as field-mesh edges of that length need, the upload's topology, boundary loops and orientation
-// kept, every vertex on the surface.
+namespace {
+// A thinned upload's field mesh (global::thinned): about as many vertices as field-mesh edges of `edge` need, the
+// upload's topology, boundary loops and orientation kept, every vertex on the surface.
+void checkThinnedFieldMesh(const global::FieldMesh& m, const MeshSurface& surface, const TriMesh& upload, double edge) {
+  const double diagonal = surface.bounds().diagonal().norm();
+  const double wanted = 2 * upload.area() / (std::sqrt(3.0) * edge * edge);
+  INFO(m.vertexCount() << " field-mesh vertices, " << wanted << " wanted, from " << upload.V.rows());
+  CHECK(m.vertexCount() < 2 * wanted);
+  CHECK(m.vertexCount() > 0.5 * wanted);
+  TriMesh field;
+  field.V = m.V;
+  field.F = m.F;
+  CHECK(test::eulerCharacteristic(field) == test::eulerCharacteristic(upload));
+  CHECK(countEdges(field).bad == 0);
+  CHECK(m.loops.size() == surface.boundaryLoops().size());
+  // The boundary loops are the upload's: each of its boundary vertices is one of the field mesh's.
+  std::set<std::array<double, 3>> points;
+  for (int v = 0; v < m.vertexCount(); ++v) points.insert({m.V(v, 0), m.V(v, 1), m.V(v, 2)});
+  for (const std::vector<int>& loop : surface.boundaryLoops())
+    for (int v : loop) CHECK(points.count({upload.V(v, 0), upload.V(v, 1), upload.V(v, 2)}) == 1);
+  // On the surface, and no triangle turned over against the surface's normal; where the remeshed upload was split,
+  // but for a few points left on their triangle where their closest points folded over (global::untangleSplit), off
+  // the surface by its sagitta.
+  double off = 0, offSplit = 0;
+  int turned = 0, offPoints = 0;
+  for (int v = 0; v < m.vertexCount(); ++v) {
+    const double d = (surface.closestPoint(m.point(v)).point - m.point(v)).norm();
+    (d > 1e-9 * diagonal ? offSplit : off) = std::max(d > 1e-9 * diagonal ? offSplit : off, d);
+    offPoints += d > 1e-9 * diagonal;
+  }
+  INFO(offPoints << " points off the surface, up to " << offSplit << " (field-mesh edge " << edge << ")");
+  if (m.thinnedSplit == 1) CHECK(offPoints == 0);
+  CHECK(offPoints <= m.vertexCount() / 1000);
+  CHECK(offSplit <= 0.1 * m.thinnedSplit * edge);  // a sagitta of the remeshed triangles, not a point astray
+  for (int f = 0; f < m.F.rows(); ++f) {
+    const Vec3 a = m.point(m.F(f, 0)), b = m.point(m.F(f, 1)), c = m.point(m.F(f, 2));
+    turned += (b - a).cross(c - a).dot(surface.closestPoint((a + b + c) / 3).normal) <= 0;
+  }
+  CHECK(off <= 1e-9 * diagonal);
+  CHECK(turned == 0);
+}
+}  // namespace
+
+// An upload far finer than the cell (a scan, a marching-cubes mesh) is thinned before its field mesh is laid.
 TEST_CASE("global field: an upload far finer than the cell is thinned to the field mesh's density, its topology and boundary kept") {
   for (const std::string name : {"freeform", "torus"}) {
     CAPTURE(name);
@@ -374,32 +415,70 @@ TEST_CASE("global field: an upload far finer than the cell is thinned to the fie
     const global::FieldMesh m = global::fieldMesh(surface, edge, 1.5, 0.25, nullptr);
     REQUIRE(m.thinnedFrom == upload.V.rows());
     CHECK(m.thinnedTo < upload.V.rows() / 10);
-    const double wanted = 2 * upload.area() / (std::sqrt(3.0) * edge * edge);
-    INFO(m.vertexCount() << " field-mesh vertices, " << wanted << " wanted, from " << upload.V.rows());
-    CHECK(m.vertexCount() < 2 * wanted);
-    CHECK(m.vertexCount() > 0.5 * wanted);
-    TriMesh field;
-    field.V = m.V;
-    field.F = m.F;
-    CHECK(test::eulerCharacteristic(field) == test::eulerCharacteristic(upload));
-    CHECK(countEdges(field).bad == 0);
-    CHECK(m.loops.size() == surface.boundaryLoops().size());
-    // The boundary loops are the upload's: each of its boundary vertices is one of the field mesh's.
-    std::set<std::array<double, 3>> points;
-    for (int v = 0; v < m.vertexCount(); ++v) points.insert({m.V(v, 0), m.V(v, 1), m.V(v, 2)});
-    for (const std::vector<int>& loop : surface.boundaryLoops())
-      for (int v : loop) CHECK(points.count({upload.V(v, 0), upload.V(v, 1), upload.V(v, 2)}) == 1);
-    // On the surface, and no triangle turned over against the surface's normal.
-    double off = 0;
-    int turned = 0;
-    for (int v = 0; v < m.vertexCount(); ++v) off = std::max(off, (surface.closestPoint(m.point(v)).point - m.point(v)).norm());
-    for (int f = 0; f < m.F.rows(); ++f) {
-      const Vec3 a = m.point(m.F(f, 0)), b = m.point(m.F(f, 1)), c = m.point(m.F(f, 2));
-      turned += (b - a).cross(c - a).dot(surface.closestPoint((a + b + c) / 3).normal) <= 0;
-    }
-    CHECK(off <= 1e-9 * diagonal);
-    CHECK(turned == 0);
+    CHECK(m.thinnedSplit == 1);
+    checkThinnedFieldMesh(m, surface, upload, edge);
   }
+}
+
+// An uneven upload coarser than the field mesh (marching tetrahedra: long edges among short ones, which the bisection
+// splits into far more vertices than the field needs) is remeshed at about its own edge, a whole number of field-mesh
+// edges, and split as many times: not split edge by edge down to the field's (the generated genus 2 at 100k faces,
+// 48k vertices remeshed to 526k, took 12.7 s of a 33 s run and half its 1.2 GB). At three field-mesh edges this one's
+// closest points fold over at a concave edge of its facets: the points there stay on their remeshed triangles.
+TEST_CASE("global field: an uneven upload coarser than the field mesh is remeshed at its own edge, then split") {
+  const TriMesh upload = test::closedSurfaceOfGenus(2, 40);
+  const MeshSurface surface(upload, "genus2.obj");
+  const double median = upload.medianEdgeLength();
+  for (const auto& [ratio, times] : {std::pair{2.0, 2}, std::pair{3.0, 3}, std::pair{1.2, 1}}) {
+    CAPTURE(ratio);
+    const double edge = median / ratio;
+    const global::FieldMesh m = global::fieldMesh(surface, edge, 1.5, 0.25, nullptr);
+    REQUIRE(m.thinnedFrom == upload.V.rows());
+    CHECK(m.thinnedSplit == times);
+    // Remeshed at about the upload's own density, not the field mesh's (at one field-mesh edge: ratio^2 as many).
+    if (times > 1) CHECK(m.thinnedTo < 3 * upload.V.rows());
+    checkThinnedFieldMesh(m, surface, upload, edge);
+  }
+}
+
+// The same where the uneven upload was refined into a smooth surface (a coarse upload: MeshSurface::refined): the
+// upload is remeshed with its points found on the refined surface, not split and bisected as the refinement left it
+// (the generated genus 1 refined 3 x 3 at 100k faces: 1.9M field-mesh vertices, 3.6 times those it needs).
+TEST_CASE("global field: an uneven upload refined smooth is remeshed on its refinement, not laid on it as refined") {
+  const TriMesh upload = test::closedSurfaceOfGenus(1, 40);
+  MeshSurface plain(upload, "genus1.obj");
+  MeshSurface refined(plain.refined(3), "genus1.obj refined");
+  refined.setRefinement(upload, 3);
+  const double edge = upload.medianEdgeLength() / 3;
+  const global::FieldMesh m = global::fieldMesh(refined, edge, 1.5, 0.25, nullptr);
+  REQUIRE(m.thinnedFrom == upload.V.rows());  // the upload's vertices, not the refinement's
+  CHECK(m.thinnedSplit >= 2);
+  CHECK(m.thinnedTo < 3 * upload.V.rows());
+  checkThinnedFieldMesh(m, refined, upload, edge);
+  // Its points on the refined surface (checkThinnedFieldMesh: to 1e-9 of the diagonal), which lies off the upload's
+  // facets: off them by more than round-off somewhere.
+  double offFacets = 0;
+  for (int v = 0; v < m.vertexCount(); ++v) offFacets = std::max(offFacets, (plain.closestPoint(m.point(v)).point - m.point(v)).norm());
+  CHECK(offFacets > 1e-4 * edge);
+}
+
+// An uneven upload (marching tetrahedra: slivers among its triangles) is refined into a smooth surface from triangles
+// of one cell on, a regular one from 1.5 (pipeline.cpp, kCoarseUneven): at 1.2 cells the first is refined, not the
+// second.
+TEST_CASE("pipeline: an uneven upload is refined smooth from triangles of one cell, a regular one from 1.5") {
+  auto refinedAt = [](const TriMesh& upload, const std::string& name) {
+    // Faces for triangles of about 1.2 cells: F triangles of mean area A / F against sqrt(3) / 2 cell^2 a face.
+    PipelineParams p = globalUpload(upload, name, static_cast<int>(0.72 * double(upload.F.rows())));
+    p.relay = false;
+    const PipelineResult r = runPipeline(p);
+    CHECK(r.solve.converged);
+    bool refined = false;
+    for (const std::string& note : r.triangulation.notes) refined |= note.find("laid on a smooth surface") != std::string::npos;
+    return refined;
+  };
+  CHECK(refinedAt(test::closedSurfaceOfGenus(1, 24), "genus1.obj"));
+  const auto torus = makeSurface("torus");
+  CHECK_FALSE(refinedAt(latticeTriangulation(*torus, 0.12).mesh, "torus.obj"));
 }
 
 // The generated genus 3 (marching tetrahedra, 59k vertices, its long edges bisected) at 1000 faces laid its field on 65

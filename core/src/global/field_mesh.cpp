@@ -21,7 +21,7 @@ constexpr double kCoarseSplit = 3.0;
 constexpr double kLongEdge = 1.3;
 constexpr double kAreaSplitMargin = 4.0;
 // An upload whose split (and bisected) mesh has over kThinAbove times the vertices a mesh of field-mesh edges has is
-// remeshed first to that edge (thinned()): kThinRounds rounds of splitting interior edges over
+// remeshed first, to that edge or a whole multiple of it near the upload's own (thinned(), thinnedSplit()): kThinRounds rounds of splitting interior edges over
 // kSplitAbove field-mesh edges, collapsing edges under kCollapseBelow while the edges made stay under kCollapsedMost
 // and no triangle turns by more than kCollapseTurn degrees, flipping towards valence 6, and relaxing. A field mesh
 // far finer than the cell lost the lattice hexagons and time: the bumps sampled as 500k triangles at 1000 and 3000
@@ -34,6 +34,8 @@ constexpr double kAreaSplitMargin = 4.0;
 constexpr double kThinAbove = 2.5, kCollapseBelow = 0.9, kCollapsedMost = 1.3, kCollapseTurn = 30.0;
 constexpr int kThinRounds = 3, kCollapseBuckets = 64;
 constexpr double kSplitAbove = 1.3, kSplitMost = 2.0;
+// Sweeps of untangleSplit before the remeshing falls back to the field's edge.
+constexpr int kUntangleSweeps = 5;
 constexpr int kSplitPasses = 20;
 // The half-width of the window a zigzag boundary's direction is taken over (zigzagWindow): at least
 // kTangentWindow field-mesh edges (about a cell) and kToothWindow of the coarse mesh's boundary edges (a zigzag's
@@ -151,6 +153,19 @@ TriMesh split(const TriMesh& mesh, int k, std::vector<std::pair<int, Vec3>>& whe
   for (int f = 0; f < out.F.rows(); ++f)
     for (int q = 0; q < 3; ++q) out.F(f, q) = tri[3 * f + q];
   return out;
+}
+
+// An uneven upload is remeshed at this many field-mesh edges, its own edge over `edge` rounded (at least 1), and
+// the remeshed mesh split as many times: an upload coarser than the field mesh is regularized at about its own edge
+// rather than split edge by edge down to the field's (serial, each split point found on the surface). The generated
+// genus 1-3 (marching tetrahedra, 37-59k vertices, median edges 1.7-3.4 field-mesh edges from 20k faces on) at 20k,
+// 30k, 50k and 100k faces, remeshed at the field's edge against this: 11 runs 6.5-34.4 s and 339-1182 MB against
+// 3.2-16.1 s and 186-582 MB (the genus 2 at 100k 32.8 -> 14.3 s, 1174 -> 555 MB), hexagons 93.63 -> 93.73 % on
+// average (within 0.9 points either way), faces cut 902 -> 678 in all; below a median of 1.5 field-mesh edges (the
+// genus set at up to 10k faces, the shared models at up to 10k) the same meshes.
+int thinnedSplit(double median, double edge) {
+  const double k = std::floor(median / edge + 0.5);
+  return k >= 1 && k < 1e6 ? static_cast<int>(k) : 1;
 }
 
 // How many vertices a mesh of equilateral triangles of edge `edge` has over `area`.
@@ -747,6 +762,79 @@ void buildTopology(FieldMesh& m, double fieldEdge, int coarse) {
 
 }  // namespace
 
+// The points split off a remeshed upload's triangles (`thin`, split into `fine`, `where` each point's triangle of it;
+// ids from kept.size() on), placed at their closest points: where the upload's facets meet at a concave edge, the
+// closest points of a triangle's grid can fold over (a genus 2 of 21k vertices remeshed at 3 field-mesh edges: 3 of
+// 360k triangles, on the inner side of a handle). Each corner of such a triangle that is no upload vertex (`kept`
+// -1) moves to the closest point of its neighbours' centroid, kUntangleSweeps sweeps; where that leaves some turned,
+// points stay on their remeshed triangles (below). Returns whether no triangle is left turned against its corners'
+// normals (else the caller remeshes at one field-mesh edge less).
+bool untangleSplit(const MeshSurface& mesh, const TriMesh& thin, const TriMesh& fine, const std::vector<std::pair<int, Vec3>>& where,
+                   const std::vector<int>& kept, std::vector<LocalGeometry>& geo) {
+  const Triangles& F = fine.F;
+  const int fixed = static_cast<int>(kept.size());
+  const int nf = static_cast<int>(F.rows()), nv = static_cast<int>(geo.size());
+  auto turned = [&](int f) {
+    const Vec3 &a = geo[F(f, 0)].point, &b = geo[F(f, 1)].point, &c = geo[F(f, 2)].point;
+    return dot(cross(b - a, c - a), geo[F(f, 0)].normal + geo[F(f, 1)].normal + geo[F(f, 2)].normal) <= 0;
+  };
+  std::vector<int> bad(nf);
+  auto findTurned = [&] {
+    parallelRanges(nf, kPointsPerThread, [&](int begin, int end) {
+      for (int f = begin; f < end; ++f) bad[f] = turned(f);
+    });
+    return std::count(bad.begin(), bad.end(), 1) > 0;
+  };
+  std::vector<char> moving(nv);
+  std::vector<Vec3> sum(nv);
+  std::vector<int> count(nv);
+  for (int sweep = 0; sweep < kUntangleSweeps; ++sweep) {
+    if (!findTurned()) return true;
+    std::fill(moving.begin(), moving.end(), 0);
+    for (int f = 0; f < nf; ++f)
+      if (bad[f])
+        for (int c = 0; c < 3; ++c) moving[F(f, c)] = F(f, c) >= fixed || kept[F(f, c)] < 0;
+    std::fill(sum.begin(), sum.end(), Vec3::Zero());
+    std::fill(count.begin(), count.end(), 0);
+    for (int f = 0; f < nf; ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int v = F(f, c);
+        if (!moving[v]) continue;
+        for (int d : {1, 2}) sum[v] += geo[F(f, (c + d) % 3)].point, count[v] += 1;
+      }
+    for (int v = 0; v < nv; ++v)
+      if (moving[v] && count[v] > 0) geo[v] = mesh.closestPoint(sum[v] / count[v]);
+  }
+  // Left turned: the split points of the remeshed triangles holding those triangles, and of the remeshed triangles
+  // around them, stay where the split put them, on the remeshed triangles (off the surface by their sagitta), with
+  // the geometry of their closest points: a patch split evenly, where points moved one by one leave slivers (the
+  // genus 2 at 100k faces: its lattice's regions then came out non-manifold there, laid again 1.6 times finer).
+  if (!findTurned()) return true;
+  const std::vector<LocalGeometry> swept = geo;
+  std::vector<char> patch(thin.F.rows(), 0), corner(thin.V.rows(), 0);
+  for (int f = 0; f < nf; ++f)
+    if (bad[f])
+      for (int c = 0; c < 3; ++c)
+        if (const int t = where[F(f, c)].first; t >= 0)
+          for (int k = 0; k < 3; ++k) corner[thin.F(t, k)] = 1;
+  for (int t = 0; t < thin.F.rows(); ++t) patch[t] = corner[thin.F(t, 0)] || corner[thin.F(t, 1)] || corner[thin.F(t, 2)];
+  for (int v = fixed; v < nv; ++v)
+    if (const int t = where[v].first; t >= 0 && patch[t]) geo[v].point = fine.V.row(v).transpose();
+  // Else, where the remeshed triangles themselves turn against the points' normals (a refined upload whose cubic fits
+  // fold between slivers: the generated genus 3 refined 2 x 2 at 100k faces), from the sweeps' places, the split
+  // points of each triangle left turned alone, in turn.
+  if (!findTurned()) return true;
+  geo = swept;
+  for (int sweep = 0; sweep < kUntangleSweeps; ++sweep) {
+    if (!findTurned()) return true;
+    for (int f = 0; f < nf; ++f)
+      if (bad[f])
+        for (int c = 0; c < 3; ++c)
+          if (const int v = F(f, c); v >= fixed) geo[v].point = fine.V.row(v).transpose();
+  }
+  return !findTurned();
+}
+
 int fieldSplit(double median, double edge) {
   const double k = std::ceil(median / edge - 0.2);
   return k >= 1 && k < 1e6 ? static_cast<int>(k) : 1;
@@ -756,53 +844,74 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, doub
   FieldMesh m;
   std::vector<LocalGeometry> geo;
   if (const auto* mesh = dynamic_cast<const MeshSurface*>(&surface)) {
-    // The upload split k x k (k from the median edge), its longer edges bisected: `base` is the mesh split.
-    auto sampled = [&](const TriMesh& base, bool once, TriMesh& fine) {
+    // The upload split k x k (k from the median edge, or `given` where positive), its longer edges bisected: `base`
+    // is the mesh split.
+    auto sampled = [&](const TriMesh& base, int given, TriMesh& fine) {
       // Nor finer than kAreaSplitMargin times the triangles of the surface's area at `edge` need: a mesh of needles,
       // whose median edge is their length, was split into a hundred times as many (a two-triangle needle at 32
       // faces: 14k field-mesh vertices and 1.6 s to refuse it); the long edges are bisected below all the same.
       const double needed = kAreaSplitMargin * base.area() / (std::sqrt(3.0) / 4 * edge * edge);
       const double most = std::floor(std::sqrt(std::min(double(kMaxFieldTriangles), std::max(1.0, needed)) /
                                                std::max<double>(1.0, double(base.F.rows()))));
-      const int k = once ? 1 : std::clamp(fieldSplit(base.medianEdgeLength(), edge), 1, static_cast<int>(std::max(1.0, most)));
+      const int k = given > 0 ? given : std::clamp(fieldSplit(base.medianEdgeLength(), edge), 1, static_cast<int>(std::max(1.0, most)));
       std::vector<int> source;
       m.where.clear();
       const TriMesh split = global::split(base, k, m.where, source);
       fine = refine(base, split, std::move(source), kLongEdge * edge, kMaxFieldTriangles, m.where);
     };
     TriMesh fine, thin;
-    sampled(mesh->mesh(), false, fine);
+    sampled(mesh->mesh(), 0, fine);
     // Where that leaves many more vertices than the field needs (an upload finer than the cell, or one of long and
     // short edges mixed, whose long ones the bisection splits: a marching-tetrahedra mesh), the upload is remeshed to
-    // the field's edge (thinned: `kept` its vertices' ids in the upload) and split again.
+    // the field's edge or a whole multiple of it (thinnedSplit; thinned: `kept` its vertices' ids in the upload) and
+    // split again, that many times.
     const double wanted = verticesAt(mesh->mesh().area(), edge);
     std::vector<int> kept;
-    const bool thinning = mesh->refinement().k <= 1 && double(fine.V.rows()) > kThinAbove * wanted;
-    if (thinning) {
-      thin = thinned(surface, mesh->mesh(), edge, kept, cancel);
-      sampled(thin, true, fine);
-      m.thinnedFrom = static_cast<int>(mesh->mesh().V.rows());
-      m.thinnedTo = static_cast<int>(thin.V.rows());
-    }
-    const TriMesh& base = thinning ? thin : mesh->mesh();
+    const bool thinning = double(fine.V.rows()) > kThinAbove * wanted;
+    // What is remeshed: the upload, also where it was refined into a smooth surface (MeshSurface::refined: its first
+    // vertices are the upload's), its points then found on that surface. The refinement keeps an uneven upload's
+    // long edges among short ones: the generated genus 1 (36k vertices) refined 3 x 3 at 100k faces laid its field on
+    // 1.9M field-mesh vertices, 3.6 times those its area needs (27.5 s, 1.6 GB).
+    const MeshSurface::Refinement& from = mesh->refinement();
+    TriMesh refinedFrom;
+    if (thinning && from.k > 1) refinedFrom.V = mesh->mesh().V.topRows(from.vertices), refinedFrom.F = from.F;
+    const TriMesh& upload = from.k > 1 && thinning ? refinedFrom : mesh->mesh();
     // An upload vertex's own geometry; a point split off an upload triangle, by its place there; a point of the
     // remeshed upload that moved or was split off, the surface's at its closest point.
-    auto geometryOf = [&](int v) {
-      const int upload = v >= base.V.rows() ? -1 : thinning ? kept[v] : v;
-      if (upload >= 0) return mesh->vertexGeometry(upload);
-      return thinning ? mesh->closestPoint(fine.V.row(v).transpose())
-                      : mesh->geometryInTriangle(m.where[v].first, m.where[v].second);
+    auto place = [&](const TriMesh& base) {
+      geo.resize(fine.V.rows());
+      parallelRanges(static_cast<int>(fine.V.rows()), kPointsPerThread, [&](int begin, int end) {
+        for (int v = begin; v < end; ++v) {
+          const int upload = v >= base.V.rows() ? -1 : thinning ? kept[v] : v;
+          geo[v] = upload >= 0 ? mesh->vertexGeometry(upload)
+                   : thinning  ? mesh->closestPoint(fine.V.row(v).transpose())
+                               : mesh->geometryInTriangle(m.where[v].first, m.where[v].second);
+        }
+      });
     };
-    geo.resize(fine.V.rows());
-    parallelRanges(static_cast<int>(fine.V.rows()), kPointsPerThread, [&](int begin, int end) {
-      for (int v = begin; v < end; ++v)
-        geo[v] = geometryOf(v);
-    });
+    if (thinning) {
+      // At thinnedSplit field-mesh edges, fewer where the split points fold over (untangleSplit).
+      // The upload's edge: its median, or its triangles' mean area's equilateral edge where shorter (a needle's median
+      // edge is its length).
+      const double own = std::min(upload.medianEdgeLength(),
+                                  std::sqrt(4 * upload.area() / (std::sqrt(3.0) * std::max<double>(1, double(upload.F.rows())))));
+      for (int times = thinnedSplit(own, edge);; --times) {
+        thin = thinned(surface, upload, times * edge, kept, cancel);
+        sampled(thin, times, fine);
+        place(thin);
+        m.thinnedFrom = static_cast<int>(upload.V.rows());
+        m.thinnedTo = static_cast<int>(thin.V.rows());
+        m.thinnedSplit = times;
+        if (times == 1 || untangleSplit(*mesh, thin, fine, m.where, kept, geo)) break;
+      }
+    } else {
+      place(mesh->mesh());
+    }
+    const TriMesh& base = thinning ? thin : mesh->mesh();
     m.coarse = base;
     // A refinement of a coarser upload (refined(k), k x k per triangle, in order): that upload is the coarse
     // mesh, each field-mesh vertex's place carried from the refined triangle into its upload triangle.
-    const MeshSurface::Refinement& from = mesh->refinement();
-    if (from.k > 1 && from.F.rows() * from.k * from.k == base.F.rows()) {
+    if (!thinning && from.k > 1 && from.F.rows() * from.k * from.k == base.F.rows()) {
       const int r = from.k;
       // Per triangle of one split, its corners' barycentric coordinates in the triangle split (refined()'s order).
       std::vector<std::array<Vec3, 3>> corners;

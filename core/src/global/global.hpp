@@ -101,6 +101,7 @@ struct FieldMesh {
   int components = 0;
   double edgeMean = 0;
   int thinnedFrom = 0, thinnedTo = 0;  // an upload thinned first (thinned()): its vertices, and those left; else 0
+  int thinnedSplit = 1;                // ... at this many field-mesh edges, then split as many times (thinnedSplit())
   int vertexCount() const { return static_cast<int>(V.rows()); }
   Vec3 point(int v) const { return V.row(v).transpose(); }
 };

@@ -257,7 +257,10 @@ Triangulation globalTriangulation(const Surface& surface, const GlobalOptions& o
           << firstSingular << ")";
       if (m.thinnedFrom > 0)
         s << " (the upload's " << m.thinnedFrom << " vertices, finer or more uneven than the field needs, remeshed to "
-          << m.thinnedTo << " at its edge)";
+          << m.thinnedTo
+          << (m.thinnedSplit > 1 ? " at " + std::to_string(m.thinnedSplit) + " times its edge and split " +
+                                       std::to_string(m.thinnedSplit) + " x " + std::to_string(m.thinnedSplit) + ")"
+                                 : std::string(" at its edge)"));
       if (options.cancelDislocations && !cancelling)
         s << "; the lattice's dislocations kept (the cancellation runs on field meshes of up to "
           << kCancelMostVertices << " vertices)";
