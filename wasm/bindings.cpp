@@ -318,7 +318,10 @@ val guarded(Body body) {
   } catch (const phex::Error& e) {
     return errorToJs(phex::errorCodeName(e.code()), e.what());
   } catch (const std::bad_alloc&) {
-    return errorToJs("internal", "out of memory");
+    // Not a bug: the run asked for more than the module's heap can grow to (phex.js restarts the core after it).
+    return errorToJs("out_of_memory",
+                     "out of memory: this run needs more than the 2 GB the WebAssembly core can hold; ask for fewer "
+                     "faces or a larger cell (the core is restarted for the next call, and its memory given back)");
   } catch (const std::exception& e) {
     return errorToJs("internal", e.what());
   }

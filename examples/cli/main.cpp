@@ -18,6 +18,7 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <new>
 #include <numeric>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -664,6 +665,9 @@ int main(int argc, char** argv) {
   } catch (const phex::Error& e) {
     std::cerr << "phex: error: " << e.what() << "\n";
     return e.code() == phex::ErrorCode::Internal ? 3 : 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "phex: error: out of memory: ask for fewer faces or a larger cell\n";
+    return 3;
   } catch (const std::exception& e) {
     std::cerr << "phex: internal error: " << e.what() << "\n";
     return 3;

@@ -54,3 +54,21 @@ test('clearUploadCache gives the memory of an upload back', async () => {
   assert.ok(kept.usedBytes > before.usedBytes + 2 ** 20, 'the upload\'s surface is kept');
   assert.ok(after.usedBytes <= before.usedBytes + SLACK_BYTES, 'and let go');
 });
+
+// A run past what the WebAssembly heap can grow to (2 GB) rejects with 'out_of_memory', naming the remedy, and is no
+// bug: the heap, grown to its limit, never shrinks, so the next call runs on a fresh core with its memory back.
+test("a run past the heap's limit rejects with out_of_memory; the next call runs on a fresh core", async () => {
+  const phex = await createPHex();
+  // The global method's field mesh for a million faces on the torus (5M vertices) runs out in a few seconds.
+  await assert.rejects(phex.run({ surface: 'torus', faces: 1000000, method: 'global' }), (error) => {
+    assert.equal(error.code, 'out_of_memory');
+    assert.match(error.message, /out of memory.*fewer faces/);
+    return true;
+  });
+  const fresh = await phex.memory();
+  const r = await phex.run({ surface: 'torus', faces: 300 });
+  phex.dispose();
+  console.log(`heap after the failed run: ${fresh.heapBytes} bytes`);
+  assert.ok(fresh.heapBytes < 2 ** 28, `the heap is back to a fresh core's (${fresh.heapBytes} bytes)`);
+  assert.ok(r.metrics.faceCount > 200);
+});

@@ -14,6 +14,11 @@ export type PHexErrorCode =
   | 'unsupported'
   /** The wasm module or the worker could not be loaded. */
   | 'io'
+  /**
+   * The run needed more memory than the WebAssembly core can hold (2 GB: about 250k faces from a 20k-triangle
+   * upload): ask for fewer faces. The core is restarted for the next call, which gives the memory back.
+   */
+  | 'out_of_memory'
   /** A bug in phex: please report it. */
   | 'internal';
 

@@ -207,7 +207,10 @@ class LocalBackend {
   async call(method, args) {
     const engine = await this.start();
     try {
-      return engine[method](...args);
+      const value = engine[method](...args);
+      // A heap grown to its limit never shrinks: the next call gets a fresh instance, this one's memory is freed.
+      if (value?.code === 'out_of_memory') this.#engine = null;
+      return value;
     } catch (error) {
       // A wasm trap leaves the instance unusable: load a fresh one for the next call.
       this.#engine = null;
@@ -260,6 +263,8 @@ class WorkerBackend {
     } else if (data.type === 'reply') {
       this.#pending.delete(data.id);
       request.resolve(data.value);
+      // A heap grown to its limit never shrinks: the worker goes (its memory with it), the next call starts another.
+      if (data.value?.code === 'out_of_memory') this.#stop(null);
     } else if (data.type === 'crashed') {
       this.#stop(new PHexError('internal', `the phex core failed: ${data.message}`));
     }
