@@ -77,3 +77,20 @@ test('in a browser the core runs in a worker: run, cancel, memory, errors, dispo
   assert.deepEqual(out.trapped, Array(3).fill(['PHexError internal', true]).flat());
   assert.equal(out.disposed, 'cancelled');
 });
+
+// A run past the 2 GB the wasm heap can grow to: 'out_of_memory', and the worker holding that heap goes (a heap never
+// shrinks), so the next call's core starts at its initial heap.
+test('in a browser a run past the heap limit rejects with out_of_memory and the next call gets a fresh worker', async () => {
+  const out = await page.evaluate(async () => {
+    const { createPHex } = await import('/phex.js');
+    const phex = await createPHex();
+    const failed = await phex.run({ surface: 'torus', faces: 1000000, method: 'global' }).then(() => 'resolved', (e) => `${e.name} ${e.code}`);
+    const memory = await phex.memory();
+    const next = await phex.run({ surface: 'torus', faces: 300 });
+    phex.dispose();
+    return { failed, heapBytes: memory.heapBytes, planarity: next.metrics.planarityMax };
+  });
+  assert.equal(out.failed, 'PHexError out_of_memory');
+  assert.ok(out.heapBytes < 2 ** 28, `heap ${out.heapBytes}`);
+  assert.ok(out.planarity <= 1e-9);
+});
