@@ -108,6 +108,40 @@ test('wasm and native CLI give the same fine upload, remeshed for the global met
   });
 });
 
+// An uneven upload coarser than the field mesh (slivers ten times as long as wide over a paraboloid) is remeshed at
+// two field-mesh edges and split 2 x 2 (field_mesh.cpp, thinnedSplit; its split points' closest points checked
+// for folds, untangleSplit): the same in both builds.
+test('wasm and native CLI give the same uneven upload, remeshed at twice the field edge and split', { skip: noCli }, async () => {
+  const lines = [];
+  const nx = 10, ny = 100;
+  for (let j = 0; j <= ny; j++) {
+    for (let i = 0; i <= nx; i++) {
+      const x = -1 + (2 * i) / nx, y = -1 + (2 * j) / ny;
+      lines.push(`v ${x} ${y} ${0.3 * (x * x + y * y)}`);
+    }
+  }
+  for (let j = 0; j < ny; j++) {
+    for (let i = 0; i < nx; i++) {
+      const a = j * (nx + 1) + i + 1;
+      lines.push(`f ${a} ${a + 1} ${a + nx + 2}`, `f ${a} ${a + nx + 2} ${a + nx + 1}`);
+    }
+  }
+  const bytes = new TextEncoder().encode(lines.join('\n'));
+  const dir = mkdtempSync(join(tmpdir(), 'phex-native-uneven-'));
+  try {
+    const file = join(dir, 'slivers.obj');
+    writeFileSync(file, bytes);
+    const params = { mesh: bytes, meshFormat: 'obj', faces: 780, method: 'global' };
+    const phex = await createPHex();
+    const r = await phex.run(params);
+    phex.dispose();
+    assert.ok(r.triangulation.notes.some((note) => /at 2 times its edge and split 2 x 2/.test(note)), r.triangulation.notes.join('\n'));
+    await assertSameRun(['--mesh', file, '--faces', '780', '--method', 'global'], params);
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 // A noisy upload whose first lay falls short is laid again with the repairs of a smooth upload (fairness, changes at
 // folded boundary panels, dislocation glides, relay and trial lays): the same mesh in both builds, and the report
 // says which lay was kept. PH-CPF's open annulus at 1500 faces (tests/data, CC BY-SA 4.0) reaches a P-Hex mesh so.
