@@ -34,7 +34,7 @@ constexpr double kAreaSplitMargin = 4.0;
 constexpr double kThinAbove = 2.5, kCollapseBelow = 0.9, kCollapsedMost = 1.3, kCollapseTurn = 30.0;
 constexpr int kThinRounds = 3, kCollapseBuckets = 64;
 constexpr double kSplitAbove = 1.3, kSplitMost = 2.0;
-// Sweeps of untangleSplit before the remeshing falls back to the field's edge.
+// Sweeps of untangleSplit at each of its steps (before the remeshing falls back to one field-mesh edge less).
 constexpr int kUntangleSweeps = 5;
 constexpr int kSplitPasses = 20;
 // The half-width of the window a zigzag boundary's direction is taken over (zigzagWindow): at least
