@@ -95,7 +95,7 @@ test('wasm and native CLI give the same upload by the global method', { skip: no
   }
 });
 
-// A fine upload is remeshed to the field's edge before the global method lays its field (field_mesh.cpp, thinned):
+// A fine upload is remeshed to the field's edge before the global method lays its field (remesh.cpp, thinned):
 // collapses in buckets of length, flips and a relaxation onto the surface, the same in both builds.
 test('wasm and native CLI give the same fine upload, remeshed for the global method', { skip: noCli }, async () => {
   await withLatticeUpload('hyperbolic-paraboloid', 20000, async (mesh, bytes) => {
@@ -109,7 +109,7 @@ test('wasm and native CLI give the same fine upload, remeshed for the global met
 });
 
 // An uneven upload coarser than the field mesh (slivers ten times as long as wide over a paraboloid) is remeshed at
-// two field-mesh edges and split 2 x 2 (field_mesh.cpp, thinnedSplit; its split points' closest points checked
+// two field-mesh edges and split 2 x 2 (remesh.cpp, thinnedSplit; its split points' closest points checked
 // for folds, untangleSplit): the same in both builds.
 test('wasm and native CLI give the same uneven upload, remeshed at twice the field edge and split', { skip: noCli }, async () => {
   const lines = [];

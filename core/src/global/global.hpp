@@ -6,6 +6,7 @@
 #include "phex/geometry.hpp"
 #include "phex/global_triangulation.hpp"
 #include "phex/mesh.hpp"
+#include "phex/mesh_surface.hpp"
 #include "phex/parallel.hpp"
 #include "phex/progress.hpp"
 #include "phex/surface.hpp"
@@ -156,6 +157,18 @@ void setScale(std::vector<Level>& levels, const std::vector<double>& scale);
 // The uniform split k of a mesh of median edge `median` into field-mesh edges of `edge` (at least 1; fieldMesh caps
 // it further by the surface's area).
 int fieldSplit(double median, double edge);
+// How many vertices a mesh of equilateral triangles of edge `edge` has over `area`.
+double verticesAt(double area, double edge);
+
+// An upload remeshed for the field mesh (remesh.cpp): to about `edge` (thinned; `kept` gets, per vertex left, its id in
+// `mesh` where it did not move, else -1), at thinnedSplit(own edge, field edge) field-mesh edges, and the points split
+// off the remeshed `thin` into `fine` (`where`: each point's triangle of thin) kept from folding over (untangleSplit:
+// false where some triangle stays turned against its corners' normals).
+int thinnedSplit(double own, double edge);
+TriMesh thinned(const Surface& surface, const TriMesh& mesh, double edge, std::vector<int>& kept, const CancelFlag* cancel);
+bool untangleSplit(const MeshSurface& mesh, const TriMesh& thin, const TriMesh& fine,
+                   const std::vector<std::pair<int, Vec3>>& where, const std::vector<int>& kept,
+                   std::vector<LocalGeometry>& geo);
 
 // The 6-fold field: per level (level 0 first) and vertex, a unit tangent direction in the Dupin frame (the five others are it
 // turned by multiples of 60 degrees). Smoothed coarse to fine by Gauss-Seidel sweeps over colours.
