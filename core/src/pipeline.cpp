@@ -1748,6 +1748,11 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       // failing Props. 4, 5, the local repair mends it (the shared models at 3000 faces: 120-500 invalid stars
       // to 1-140).
       repairStars(t.triangulation, *t.surface);
+      // A re-lay of a run under auto that chose the global method: its notes say why, as the first lay's did.
+      if (!params.globalBecause.empty()) {
+        surfaceNote += (surfaceNote.empty() ? "" : "; ") + params.globalBecause;
+        t.globalBecause = params.globalBecause;
+      }
     } else if (params.method == TriangulationMethod::Lattice) {
       t.triangulation = latticeLaidToCount(dynamic_cast<const ParametricSurface&>(*t.surface), cell, params.cell > 0 ? 0 : params.faces);
       repairStars(t.triangulation, *t.surface);
@@ -1864,6 +1869,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
         t.triangulation = globalTriangulation(*t.surface, globalOptions(params, params.cell > 0 ? params.cell : 0, t.surface.get()), progress, cancel);
         repairStars(t.triangulation, *t.surface);
         surfaceNote += (surfaceNote.empty() ? "" : "; ") + why;
+        t.globalBecause = why;
       };
       if (global) {
         std::ostringstream s;
@@ -2258,6 +2264,7 @@ PipelineResult runOnce(const PipelineParams& params, const ProgressFn& progress,
   TriangulationStage stage = triangulateLocal(params, progress, cancel, &stageDual);
   r.method = stage.method;
   r.field = stage.field;
+  r.globalBecause = stage.globalBecause;
   r.surface = std::move(stage.surface);
   r.surfaceReused = stage.surfaceReused;
   r.origin = stage.origin;
@@ -2928,6 +2935,13 @@ PipelineResult withTrials(PipelineResult best, const PipelineParams& params, con
 
 namespace {
 
+// Whether `first`, laid by `params` under auto, went to the global method by auto's own choice (not as Method 2's
+// rows' replacement, PipelineResult::Relay::globally, whose re-lays choose again).
+bool globallyChosen(const PipelineParams& params, const PipelineResult& first) {
+  return params.method == TriangulationMethod::Auto && first.method == TriangulationMethod::Global &&
+         !first.globalBecause.empty() && !first.relay.globally;
+}
+
 // After `first` (laid by `params`), the global method laid again where it fell short (relayed), then the trial lays
 // (withTrials).
 PipelineResult relayAndTrials(PipelineResult first, const PipelineParams& params, const ProgressFn& progress,
@@ -2936,8 +2950,12 @@ PipelineResult relayAndTrials(PipelineResult first, const PipelineParams& params
   // the notes), or where Method 2's rows gave way to the global method, the global method's.
   PipelineParams laidWith = params;
   if (first.relay.globally) laidWith.method = TriangulationMethod::Global;
+  // Where auto chose the global method itself, the re-lays lay globally at once (PipelineParams::globalBecause).
+  const bool chosen = globallyChosen(params, first);
+  if (chosen) laidWith.method = TriangulationMethod::Global, laidWith.globalBecause = first.globalBecause;
+  const PipelineParams relayFrom = chosen ? laidWith : params;
   const bool fellShort = !reached(first) || nodesOfFourCut(first) > kRelayNodesOfFour * first.metrics.faceCount;
-  PipelineResult kept = fellShort && !first.relay.tried ? relayed(std::move(first), params, laidWith, progress, cancel)
+  PipelineResult kept = fellShort && !first.relay.tried ? relayed(std::move(first), relayFrom, laidWith, progress, cancel)
                                                         : std::move(first);
   return withTrials(std::move(kept), params, laidWith, progress, cancel);
 }
@@ -2954,6 +2972,7 @@ PipelineResult withNoisyRepairs(PipelineResult first, const PipelineParams& para
   PipelineParams again = params;
   again.noisyRepairs = true;
   if (first.relay.globally) again.method = TriangulationMethod::Global;
+  if (globallyChosen(params, first)) again.method = TriangulationMethod::Global, again.globalBecause = first.globalBecause;
   if (progress) progress({"triangulate", 0, "laying again with the repairs of a smooth upload (the first lay fell short)"});
   PipelineResult::Relay relay = relayAfter(first);
   relay.globally = first.relay.globally;

@@ -1055,6 +1055,31 @@ TEST_CASE("pipeline: a noisy upload that falls short is laid again with the repa
   CHECK(r.totalMilliseconds > once.totalMilliseconds);  // both lays' time
 }
 
+// Where auto chose the global method for an upload, the pipeline's re-lays (relay, trial lays, the noisy repairs' lay)
+// lay globally at once and say why as the first lay did (PipelineParams::globalBecause): PH-CPF's intersection shell at
+// 1500 faces keeps a re-lay, whose own choice (Method 2's trial lays again, a second and more each lay) had found 2
+// systems of rows where the first lay's found 3.
+TEST_CASE("pipeline: re-lays of an upload auto tiled globally do not choose the method again") {
+  PipelineParams p;
+  p.mesh = upload("phcpf_intersection.off");
+  p.faces = 1500;
+  p.relay = false;
+  const PipelineResult first = runPipeline(p);
+  REQUIRE(first.method == TriangulationMethod::Global);
+  REQUIRE_FALSE(first.globalBecause.empty());
+  CHECK(first.triangulation.notes.at(0).find(first.globalBecause) != std::string::npos);
+  p.relay = true;
+  const PipelineResult r = runPipeline(p);
+  REQUIRE((r.relay.noisyRepairsKept || r.relay.kept || r.relay.trialShare > 0));  // a re-lay is kept
+  CHECK(r.method == TriangulationMethod::Global);
+  CHECK(r.globalBecause == first.globalBecause);
+  CHECK(r.triangulation.notes.at(0).find(first.globalBecause) != std::string::npos);
+  // A method asked for explicitly has no reason to give.
+  p.method = TriangulationMethod::Global;
+  p.relay = false;
+  CHECK(runPipeline(p).globalBecause.empty());
+}
+
 // PH-CPF's open annulus at 1500 faces: its first lay reaches a P-Hex mesh only by cutting 149 interior faces and 44
 // boundary panels (before the dislocations were cancelled it stalled, planarity 6e-3); laid again with the repairs it
 // reaches one with 1 + 1 cut (measured: 87 % hexagons).

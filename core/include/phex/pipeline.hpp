@@ -149,6 +149,11 @@ struct PipelineParams {
   // the one that reached it (PipelineResult::Relay::noisyRepairs). Set, they apply from the first lay. On the five
   // noisy shared models at 1000-10000 faces, 0 -> 15 of 20 runs reach a P-Hex mesh (METHOD.md).
   bool noisyRepairs = false;
+  // Why auto chose the global method for an upload (PipelineResult::globalBecause), on the pipeline's own re-lays of
+  // such a run (the relay, the trial lays, the noisy repairs' lay): they lay globally at once, with this in their
+  // notes, instead of choosing again (the intersection shell at 10k faces: Method 2's trial lays took 2.5 s of each
+  // 3.8 s lay). Empty: the method is chosen as `method` says.
+  std::string globalBecause;
 };
 
 // The global method's options of `params`, at `cell` (0: calibrated to params.faces), for `surface` where given
@@ -167,6 +172,7 @@ struct StageTiming {
 struct PipelineResult {
   TriangulationMethod method;  // the triangulation method used (Auto resolved)
   std::string field;           // the direction field of a conjugate method (Auto resolved), else empty
+  std::string globalBecause;   // an upload under auto tiled globally: why (as the notes say), else empty
   SurfacePtr surface;          // the surface tiled (analytic, uploaded mesh, or subdivision limit surface)
   Triangulation triangulation;
   TriangulationCheck check;    // Propositions 4/5 on every star, valences, edge lengths
@@ -268,6 +274,7 @@ void validate(const PipelineParams& params);
 struct TriangulationStage {
   TriangulationMethod method;  // the method used (Auto resolved)
   std::string field;           // the field a conjugate method laid along (Auto resolved), else empty
+  std::string globalBecause;   // PipelineResult::globalBecause
   SurfacePtr surface;           // in the local frame: see PipelineResult::origin
   bool surfaceReused = false;  // PipelineResult::surfaceReused
   Vec3 origin = Vec3::Zero();  // PipelineResult::origin (the triangulation is in the file's coordinates)
