@@ -1,6 +1,7 @@
 #include "phex/mesh.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <vector>
@@ -21,11 +22,16 @@ double TriMesh::meanEdgeLength() const {
   return F.rows() ? sum / (3.0 * F.rows()) : 0.0;
 }
 
-double TriMesh::medianEdgeLength() const {
+std::vector<double> TriMesh::edgeLengths() const {
   std::vector<double> lengths;
   lengths.reserve(3 * static_cast<std::size_t>(F.rows()));
   for (int f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) lengths.push_back((V.row(F(f, k)) - V.row(F(f, (k + 1) % 3))).norm());
+  return lengths;
+}
+
+double TriMesh::medianEdgeLength() const {
+  std::vector<double> lengths = edgeLengths();
   if (lengths.empty()) return 0.0;
   std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
   return lengths[lengths.size() / 2];
@@ -35,6 +41,10 @@ double TriMesh::area() const {
   double a = 0;
   for (int f = 0; f < F.rows(); ++f) a += 0.5 * (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).norm();
   return a;
+}
+
+double TriMesh::triangleSize() const {
+  return F.rows() > 0 ? std::sqrt(4 * area() / (std::sqrt(3.0) * double(F.rows()))) : 0.0;
 }
 
 double PolyMesh::meanEdgeLength() const {

@@ -214,9 +214,10 @@ std::shared_ptr<const MeshSurface> uploadedSurface(const MeshInput& in, bool& re
 // sit on flat facets that bend at every edge, while its directions come from curvature fitted smoothly
 // across them. Panels across the facets' edges cannot be planar and near the surface at once: a dome
 // sampled 24 x 24 (1152 triangles) stalled at 2e-3 at 3000 faces (exit 2), a wave 12 x 12 ended 1.5 % of the
-// diagonal off at 1000 faces. Where its triangles are over kCoarseUpload cells in size (triangleSize), the
-// lay runs on the upload refined into a smooth surface through its vertices (MeshSurface::refined), k x k
-// per triangle for edges of about kRefinedEdge of a cell.
+// diagonal off at 1000 faces. Where its triangles are over kCoarseUpload cells in size (TriMesh::triangleSize: by
+// the mean edge, 0.2 x 0.02 triangles on a 20 m vault were refined 4 x 4 for nothing, three times the time), the
+// lay runs on the upload refined into a smooth surface through its vertices (MeshSurface::refined), k x k per
+// triangle for edges of about kRefinedEdge of a cell.
 constexpr double kCoarseUpload = 1.5, kRefinedEdge = 0.5;
 // An uneven upload (its edges' 90th percentile over kUnevenSpread times their 10th: a marching-tetrahedra mesh, slivers
 // among its triangles, whose facets' normals scatter) is refined from kCoarseUneven cells on instead. The generated
@@ -232,19 +233,9 @@ constexpr double kCoarseUneven = 1.0, kUnevenSpread = 4.0;
 constexpr int kRefineChoices = 3;
 constexpr double kFieldEdgeRange = 1.25;
 
-// The edge of the equilateral triangle of a mesh's mean triangle area: its triangles' size. The mean edge
-// would count long thin triangles by their long edges, which a vault's grid runs along its straight
-// direction (0.2 x 0.02 triangles on a 20 m vault were refined 4 x 4 for nothing: three times the time).
-double triangleSize(const TriMesh& mesh) {
-  return mesh.F.rows() > 0 ? std::sqrt(4 * mesh.area() / (std::sqrt(3.0) * double(mesh.F.rows()))) : 0.0;
-}
-
 // Whether `mesh`'s edges spread over more than kUnevenSpread between their 10th and 90th percentiles.
 bool unevenEdges(const TriMesh& mesh) {
-  std::vector<double> lengths;
-  lengths.reserve(3 * static_cast<std::size_t>(mesh.F.rows()));
-  for (int f = 0; f < mesh.F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) lengths.push_back((mesh.V.row(mesh.F(f, c)) - mesh.V.row(mesh.F(f, (c + 1) % 3))).norm());
+  std::vector<double> lengths = mesh.edgeLengths();
   if (lengths.size() < 10) return false;
   const auto at = [&](std::size_t k) {
     std::nth_element(lengths.begin(), lengths.begin() + static_cast<std::ptrdiff_t>(k), lengths.end());
@@ -267,7 +258,7 @@ bool smoothRepairs(const PipelineParams& params, const Surface& surface) {
   return params.noisyRepairs || !noisyUpload(surface);
 }
 
-// How finely to refine `mesh`, whose triangles are of `size` (triangleSize), for `cell` (1: not at all).
+// How finely to refine `mesh`, whose triangles are of `size` (TriMesh::triangleSize), for `cell` (1: not at all).
 // Neither a plane (nothing to smooth) nor a mesh with a sharp crease (which the jets would round off: it gets
 // its note instead); a low-poly mesh whose facets turn by 30 degrees here and there, about as much as
 // elsewhere, is refined.
@@ -1668,7 +1659,7 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       t.origin = origin;
       if (params.start) *params.start -= origin;
       const double cellAsked = params.cell > 0 ? params.cell : cellForFaceCount(*upload, params.faces);
-      const double size = triangleSize(upload->mesh());
+      const double size = upload->mesh().triangleSize();
       if (const int k = refinementFor(*upload, size, cellAsked); k > 1) {
         const std::shared_ptr<const MeshSurface> refined = refinedUpload(upload, k);
         std::ostringstream s;

@@ -16,10 +16,16 @@ struct TriMesh {
   Triangles F;
   // Mean edge length over all triangles (each shared edge counted from both sides).
   double meanEdgeLength() const;
+  // Every triangle's three edge lengths, in order (each shared edge counted from both sides).
+  std::vector<double> edgeLengths() const;
   // Median edge length over all triangles (each shared edge counted from both sides); 0 without triangles.
   double medianEdgeLength() const;
   // Sum of the triangles' areas.
   double area() const;
+  // The edge of the equilateral triangle of the mean triangle area: the triangles' size; 0 without triangles. The
+  // mean or median edge would count long thin triangles by their long edges (a vault's grid along its straight
+  // direction, a needle's length).
+  double triangleSize() const;
 };
 
 // The rows of a point matrix by their exact coordinates (-0 and +0 alike; of equal rows the first): open addressing

@@ -526,10 +526,8 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, doub
     };
     if (thinning) {
       // At thinnedSplit field-mesh edges, fewer where the split points fold over (untangleSplit).
-      // The upload's edge: its median, or its triangles' mean area's equilateral edge where shorter (a needle's median
-      // edge is its length).
-      const double own = std::min(upload.medianEdgeLength(),
-                                  std::sqrt(4 * upload.area() / (std::sqrt(3.0) * std::max<double>(1, double(upload.F.rows())))));
+      // The upload's edge: its median, or its triangles' size where smaller (a needle's median edge is its length).
+      const double own = std::min(upload.medianEdgeLength(), upload.triangleSize());
       for (int times = thinnedSplit(own, edge);; --times) {
         thin = thinned(surface, upload, times * edge, kept, cancel);
         sampled(thin, times, fine);
