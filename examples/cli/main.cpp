@@ -54,7 +54,7 @@ Options of `phex run`:
                             lattice (parameter rows; analytic surfaces only), or global (a 6-fold
                             field in the Dupin metric with singular vertices, its lattice extracted:
                             any surface, any genus, pentagons and heptagons at the singularities)
-  --anisotropy A            global: largest ratio of the Dupin metric's axes followed, 1..8 (default 1.5;
+  --anisotropy A            global: largest ratio of the Dupin metric's axes followed, 1..8 (default 2;
                             1 gives triangles equilateral in space)
   --alignment W             global: weight of the alignment with the flatter principal direction, 0..10
                             (default 1; 0 leaves the field free but for the boundary; on smooth surfaces

@@ -421,7 +421,7 @@ export interface RunParams {
   /** §5.3 lower bound b on the step ratio |CM|/|AB| near parabolic curves, in [0, 2]. Default 0.3; 0 turns it off. */
   lowerBound?: number;
   /**
-   * Method 'global': the largest ratio of the Dupin metric's two axes the field follows, in [1, 8]. Default 1.5;
+   * Method 'global': the largest ratio of the Dupin metric's two axes the field follows, in [1, 8]. Default 2;
    * 1 gives triangles equilateral in space (an isotropic field), larger values follow the Dupin indicatrix further
    * where it is elongated. Needs `capabilities().globalOptions`.
    */

@@ -32,7 +32,7 @@ struct GlobalOptions {
   int faces = 0;
   // Largest ratio of the Dupin metric's two axes the field follows, in [1, 8]: 1 gives triangles equilateral
   // in space (an isotropic field), larger values follow the Dupin indicatrix further where it is elongated.
-  double anisotropy = 1.5;
+  double anisotropy = 2.0;
   // Where |curvature| is small (flat parts, parabolic curves) the Dupin metric tends to the isotropic one instead of
   // degenerating: each principal |curvature| gets this share of the surface's median largest |curvature| added
   // before their ratio is taken, in [0.01, 1]. Smaller values follow a near-developable surface's elongated

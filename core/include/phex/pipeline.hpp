@@ -112,7 +112,7 @@ struct PipelineParams {
   // weight of the principal alignment, in [0, 10]; how far the cell follows the curvature, in [0, 1] (0: uniform);
   // the curvature floor under which the metric tends to the isotropic one, as a share of the surface's median
   // largest |curvature|, in [0.01, 1].
-  double anisotropy = 1.5;
+  double anisotropy = 2.0;
   double alignment = 1.0;
   double curvatureSizing = 0.0;
   double curvatureFloor = 0.25;
