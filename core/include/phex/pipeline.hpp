@@ -28,6 +28,8 @@ constexpr double kCoverageGapGoal = 1.0;
 // The global method's second lay (PipelineParams::relay): the metric it follows, and the share of the faces beyond
 // which the first lay's cuts (two nodes of four faces per interior face cut, one per boundary panel) call for it.
 constexpr double kRelayAnisotropy = 2.5, kRelayFloor = 0.05, kRelayNodesOfFour = 0.05;
+// The rounds against folds that align before they merge (PipelineParams::foldAlignRounds; see pipeline.cpp).
+constexpr int kAlignRounds = 3;
 // The global method's trial lays (PipelineParams::relay): where the lay kept still has nodes of four faces from
 // cuts, at up to kTrialMostFaces faces, it is laid again for kTrialShares of the faces (its lattice then falls
 // otherwise around the few places where the solve had to cut) and the best is kept.
@@ -133,6 +135,10 @@ struct PipelineParams {
   // uploaded bumps at 3000-20000 faces 80-83 % fewer cuts, as many hexagons or more, 2-6 % fewer faces; on the
   // torus and the analytic bumps laid globally 23-88 % fewer cuts, a point or two of hexagons less (METHOD.md).
   bool foldFlips = true;
+  // How many of those rounds first move a folded face's neighbour in line along the flatter principal direction
+  // before they merge (pipeline.cpp, kAlignRounds: 3). Not an option of the command line or the library: the tests
+  // of cases chosen when it was 1 keep 1.
+  int foldAlignRounds = kAlignRounds;
   // The global method's position field with its dislocations cancelled before the extraction
   // (GlobalOptions::cancelDislocations): each lattice dislocation (a vertex of five next to one of seven) joined
   // with one of the opposite sense or moved into a singular point. On the 40 clean runs hexagons at 3000 faces and
