@@ -896,9 +896,10 @@ constexpr int kFoldPatience = 1;
 // In the first two rounds: 97.92 / 97.89 % with 1 + 3 cut; in every round: 97.88 / 97.88 % with 4 + 3 cut.
 // (kAlignRounds is in pipeline.hpp, the default of PipelineParams::foldAlignRounds.)
 constexpr double kAlignMost = 0.3, kAligned = 0.05;
-// Not where more faces than this share fold: a coarse or noisy upload (the shared models: a fifth to a third),
-// whose flips took its hexagons from 94 % to 54 % (the car at 3000 faces), and whose collapses (below) 92 to 61 %.
-constexpr double kFoldFlipShare = 0.08;
+// Not where more faces than kFoldFlipShare fold (pipeline.hpp; PipelineParams::foldRoundsShare): a coarse or noisy
+// upload (the shared models: a fifth to a third), whose flips took its hexagons from 94 % to 54 % (the car at 3000
+// faces), and whose collapses (below) 92 to 61 %. Where nothing else reaches a P-Hex mesh, runPipeline lays again
+// with kFoldRescueShare.
 // Collapses remove a vertex of the triangulation (a face of the P-Hex mesh) each: at most this share of the
 // vertices, and where a face count was asked for, not below kCollapseFloor of it (the goal is within 10 %, and
 // the global method's own count misses by up to 5 %). On the 40-run sweep (five rounds) a share of 3 % cut 295 faces, 5 %
@@ -1108,7 +1109,7 @@ FoldFlips flipFoldsAway(Triangulation& t, const Surface& surface, const Pipeline
     for (int f = 0; f < hex.faceCount(); ++f)
       if (crosses[f] && hex.faceSize(f) >= 4 && (!dual.boundaryFace[f] || panelsToo))
         (dual.boundaryFace[f] ? foldedPanels : folded).push_back(f);
-    if (round == 0 && folded.size() > kFoldFlipShare * double(dual.mesh.faceCount())) {
+    if (round == 0 && folded.size() > params.foldRoundsShare * double(dual.mesh.faceCount())) {
       keptDual = std::move(dual);  // of `best`, which is `t` as it came
       keptSolve = SolvedDual{std::move(hex), std::move(solved)};
       kept.folded = static_cast<int>(folded.size());
@@ -2997,16 +2998,49 @@ PipelineResult withNoisyRepairs(PipelineResult first, const PipelineParams& para
   return std::move(kept);
 }
 
+// The first lay and, for the global method, the lays again where it falls short (relayAndTrials, withNoisyRepairs).
+PipelineResult layAndRelay(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
+  PipelineResult first = coveredGlobally(runOnce(params, progress, cancel), params, progress, cancel);
+  const bool noisy = first.surface && !smoothRepairs(params, *first.surface);
+  return !params.relay || first.method != TriangulationMethod::Global ? std::move(first)
+         : !noisy                                                 ? relayAndTrials(std::move(first), params, progress, cancel)
+         : reached(first) && nodesOfFourCut(first) <= kRelayNodesOfFour * first.metrics.faceCount
+             ? std::move(first)
+             : withNoisyRepairs(std::move(first), params, progress, cancel);
+}
+
 }  // namespace
 
 PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
-  PipelineResult first = coveredGlobally(runOnce(params, progress, cancel), params, progress, cancel);
-  const bool noisy = first.surface && !smoothRepairs(params, *first.surface);
-  PipelineResult kept = !params.relay || first.method != TriangulationMethod::Global ? std::move(first)
-                        : !noisy                                                 ? relayAndTrials(std::move(first), params, progress, cancel)
-                        : reached(first) && nodesOfFourCut(first) <= kRelayNodesOfFour * first.metrics.faceCount
-                            ? std::move(first)
-                            : withNoisyRepairs(std::move(first), params, progress, cancel);
+  PipelineResult kept = layAndRelay(params, progress, cancel);
+  // Where no lay reached a P-Hex mesh (the solve stalled short of the tolerance: the coarse, near-developable shared
+  // models fold a tenth to a fifth of their faces), all of it once more with the rounds against folds run also
+  // where up to kFoldRescueShare of the faces fold, kept where that reaches one (kFoldRescueShare).
+  if (params.relay && params.foldFlips && kept.method == TriangulationMethod::Global && !reached(kept) &&
+      params.foldRoundsShare < kFoldRescueShare) {
+    PipelineParams again = params;
+    again.foldRoundsShare = kFoldRescueShare;
+    if (globallyChosen(params, kept)) again.method = TriangulationMethod::Global, again.globalBecause = kept.globalBecause;
+    if (progress) progress({"triangulate", 0, "laying again with the rounds against folds on every fold (no lay reached a P-Hex mesh)"});
+    PipelineResult second = layAndRelay(again, progress, cancel);
+    std::ostringstream s;
+    s.precision(2);
+    s << "no lay reached a P-Hex mesh (planarity " << kept.metrics.planarityMax
+      << "); laid again with the edge collapses and flips against folds run also where more than "
+      << std::lround(100 * params.foldRoundsShare) << " % of the faces fold (up to " << std::lround(100 * kFoldRescueShare)
+      << " %), fewer hexagons for planar faces: ";
+    if (reached(second)) {
+      s << "it reached one (" << second.metrics.faceCount << " faces, " << nodesOfFourCut(second)
+        << " nodes of four faces from cuts): kept";
+      second.triangulation.notes.push_back(s.str());
+      second.totalMilliseconds += kept.totalMilliseconds;
+      kept = std::move(second);
+    } else {
+      s << "it did not reach one either: the first is kept";
+      kept.triangulation.notes.push_back(s.str());
+      kept.totalMilliseconds += second.totalMilliseconds;
+    }
+  }
   if (progress) progress({"done", 1, "done"});
   return kept;
 }

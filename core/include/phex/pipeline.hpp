@@ -30,6 +30,9 @@ constexpr double kCoverageGapGoal = 1.0;
 constexpr double kRelayAnisotropy = 2.5, kRelayFloor = 0.05, kRelayNodesOfFour = 0.05;
 // The rounds against folds that align before they merge (PipelineParams::foldAlignRounds; see pipeline.cpp).
 constexpr int kAlignRounds = 3;
+// The rounds against folds run where at most kFoldFlipShare of the faces fold (PipelineParams::foldRoundsShare), and
+// where no lay reached a P-Hex mesh, all is laid again with kFoldRescueShare (runPipeline; see pipeline.cpp).
+constexpr double kFoldFlipShare = 0.08, kFoldRescueShare = 0.25;
 // The global method's trial lays (PipelineParams::relay): where the lay kept still has nodes of four faces from
 // cuts, at up to kTrialMostFaces faces, it is laid again for kTrialShares of the faces (its lattice then falls
 // otherwise around the few places where the solve had to cut) and the best is kept.
@@ -139,6 +142,10 @@ struct PipelineParams {
   // before they merge (pipeline.cpp, kAlignRounds: 3). Not an option of the command line or the library: the tests
   // of cases chosen when it was 1 keep 1.
   int foldAlignRounds = kAlignRounds;
+  // The largest share of the faces folded (in the dual solved with folds allowed) at which those rounds run; more
+  // folded, the run cuts them instead (kFoldFlipShare; runPipeline raises it to kFoldRescueShare where no lay reached
+  // a P-Hex mesh). Not an option of the command line or the library.
+  double foldRoundsShare = kFoldFlipShare;
   // The global method's position field with its dislocations cancelled before the extraction
   // (GlobalOptions::cancelDislocations): each lattice dislocation (a vertex of five next to one of seven) joined
   // with one of the opposite sense or moved into a singular point. On the 40 clean runs hexagons at 3000 faces and
