@@ -92,8 +92,9 @@ export const PRESETS = {
     params: { faces: 1500, method: 'global' },
   },
   // PH-CPF's car, closed and near-developable over a third of it, folds faces next to its near-parabolic parts that
-  // only cuts make planar: with the default share of cuts (a tenth) it stops short of planar at 1000 faces (exit 2,
-  // 2e-2); allowed 0.3 it comes out planar to 1e-9 with 72 faces cut in two, each cut making two nodes of four faces.
+  // only cuts make planar: allowed a share of 0.3 its first lay comes out planar to 1e-9 with 72 faces cut in two,
+  // each cut making two nodes of four faces. (With the default share, a tenth, its lays stall at 2e-2 and the run lays
+  // it again with the rounds against folds on more folds: planar with 9 faces cut, 75 % hexagons.)
   // (The genus 3 model was this preset's until its lattice's dislocations were cancelled: it now comes out planar
   // with 4 faces cut by default, the preset above.)
   'Planar at the price of cuts: the car upload with cut share 0.3': {

@@ -513,7 +513,7 @@ test('the genus-3 preset loads its bundled model, tiles it with the global metho
 });
 
 // The car with a share of cuts of 0.3: the preset sets the form's cut share, the run sends it, and the mesh comes out
-// planar (the default leaves this model off planar), the share kept in the link.
+// planar (by default it comes out planar too, laid again where its lays stall), the share kept in the link.
 test('the cut-share preset comes out planar with faces cut, and its link keeps the share', async () => {
   await afterRun(() => page.click('button[data-preset^="Planar at the price of cuts"]'));
   assert.equal(await page.getAttribute('body', 'data-state'), 'ready', await page.textContent('#error'));
