@@ -145,12 +145,20 @@ test('wasm and native CLI give the same uneven upload, remeshed at twice the fie
 // A noisy upload whose first lay falls short is laid again with the repairs of a smooth upload (fairness, changes at
 // folded boundary panels, dislocation glides, relay and trial lays): the same mesh in both builds, and the report
 // says which lay was kept. PH-CPF's open annulus at 1500 faces (tests/data, CC BY-SA 4.0) reaches a P-Hex mesh so.
-test('wasm and native CLI give the same noisy upload, laid again with the repairs', { skip: noCli }, async () => {
-  const file = fileURLToPath(new URL('../data/phcpf_six_s0.off', import.meta.url));
-  const params = { mesh: new Uint8Array(readFileSync(file)), meshFormat: 'off', meshName: 'phcpf_six_s0.off', faces: 1500 };
+// A model of tests/data run in wasm on a fresh instance: its path, the params and the result.
+async function runDataModel(name, faces) {
+  const file = fileURLToPath(new URL(`../data/${name}`, import.meta.url));
+  const params = { mesh: new Uint8Array(readFileSync(file)), meshFormat: 'off', meshName: name, faces };
   const phex = await createPHex();
-  const r = await phex.run(params);
-  phex.dispose();
+  try {
+    return { file, params, r: await phex.run(params) };
+  } finally {
+    phex.dispose();
+  }
+}
+
+test('wasm and native CLI give the same noisy upload, laid again with the repairs', { skip: noCli }, async () => {
+  const { file, params, r } = await runDataModel('phcpf_six_s0.off', 1500);
   assert.ok(r.relay.noisyRepairs && r.relay.noisyRepairsKept, JSON.stringify(r.relay));
   assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
   assert.ok(r.triangulation.notes.some((note) => /laid again with them, as a smooth upload is, it reached one/.test(note)), r.triangulation.notes.join('\n'));
@@ -161,11 +169,7 @@ test('wasm and native CLI give the same noisy upload, laid again with the repair
 // a tenth of its faces folding), all is laid again with the rounds against folds on more folds: planar in both
 // builds, the same mesh, and a note says so.
 test('wasm and native CLI give the same car, laid again with the rounds against folds where no lay reached a P-Hex mesh', { skip: noCli }, async () => {
-  const file = fileURLToPath(new URL('../data/phcpf_car_r.off', import.meta.url));
-  const params = { mesh: new Uint8Array(readFileSync(file)), meshFormat: 'off', meshName: 'phcpf_car_r.off', faces: 1000 };
-  const phex = await createPHex();
-  const r = await phex.run(params);
-  phex.dispose();
+  const { file, params, r } = await runDataModel('phcpf_car_r.off', 1000);
   assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
   assert.equal(r.metrics.selfIntersectingCount, 0);
   assert.ok(r.triangulation.notes.some((note) => /no lay reached a P-Hex mesh .* it reached one/.test(note)), r.triangulation.notes.join('\n'));
