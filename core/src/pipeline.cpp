@@ -2753,17 +2753,23 @@ void keepAfterRelay(PipelineResult& kept, const PipelineResult& first, const Pip
 
 // A second lay of `params` after `first`: its result, or none where it cannot be laid at all (a cancellation goes on to
 // the caller): `first` then stands, with `relay` and a note saying so (`what` the second lay, `kept` the first).
-std::optional<PipelineResult> layAgain(const PipelineParams& params, PipelineResult& first, const PipelineResult::Relay& relay,
-                                       const std::string& what, const std::string& kept, const ProgressFn& progress,
-                                       const CancelFlag* cancel) {
+// (`lay` the second lay: runOnce by default.)
+template <class Lay>
+std::optional<PipelineResult> layAgainWith(const Lay& lay, PipelineResult& first, const PipelineResult::Relay& relay,
+                                           const std::string& what, const std::string& kept) {
   try {
-    return runOnce(params, progress, cancel);
+    return lay();
   } catch (const Error& e) {
     if (e.code() == ErrorCode::Cancelled) throw;
     first.relay = relay;
     first.triangulation.notes.push_back(what + ", the surface could not be tiled (" + e.what() + "): " + kept + " kept");
     return std::nullopt;
   }
+}
+std::optional<PipelineResult> layAgain(const PipelineParams& params, PipelineResult& first, const PipelineResult::Relay& relay,
+                                       const std::string& what, const std::string& kept, const ProgressFn& progress,
+                                       const CancelFlag* cancel) {
+  return layAgainWith([&] { return runOnce(params, progress, cancel); }, first, relay, what, kept);
 }
 
 // An upload under auto that Method 2's rows left partly bare (a point of it farther than the coverage goal from
@@ -2939,18 +2945,22 @@ bool globallyChosen(const PipelineParams& params, const PipelineResult& first) {
          !first.globalBecause.empty() && !first.relay.globally;
 }
 
+// The parameters `first` (laid by `params`) is laid again with: those asked (under auto the choice of method runs
+// again, and says so in the notes), or where Method 2's rows gave way to the global method, the global method's; where
+// auto chose the global method itself, the global method at once with its reason (PipelineParams::globalBecause).
+PipelineParams laidAgainWith(const PipelineParams& params, const PipelineResult& first) {
+  PipelineParams again = params;
+  if (first.relay.globally) again.method = TriangulationMethod::Global;
+  if (globallyChosen(params, first)) again.method = TriangulationMethod::Global, again.globalBecause = first.globalBecause;
+  return again;
+}
+
 // After `first` (laid by `params`), the global method laid again where it fell short (relayed), then the trial lays
 // (withTrials).
 PipelineResult relayAndTrials(PipelineResult first, const PipelineParams& params, const ProgressFn& progress,
                               const CancelFlag* cancel) {
-  // The parameters of the lay kept so far: those asked (under auto the choice of method runs again, and says so in
-  // the notes), or where Method 2's rows gave way to the global method, the global method's.
-  PipelineParams laidWith = params;
-  if (first.relay.globally) laidWith.method = TriangulationMethod::Global;
-  // Where auto chose the global method itself, the re-lays lay globally at once (PipelineParams::globalBecause).
-  const bool chosen = globallyChosen(params, first);
-  if (chosen) laidWith.method = TriangulationMethod::Global, laidWith.globalBecause = first.globalBecause;
-  const PipelineParams relayFrom = chosen ? laidWith : params;
+  PipelineParams laidWith = laidAgainWith(params, first);
+  const PipelineParams relayFrom = globallyChosen(params, first) ? laidWith : params;
   const bool fellShort = !reached(first) || nodesOfFourCut(first) > kRelayNodesOfFour * first.metrics.faceCount;
   PipelineResult kept = fellShort && !first.relay.tried ? relayed(std::move(first), relayFrom, laidWith, progress, cancel)
                                                         : std::move(first);
@@ -2966,10 +2976,8 @@ PipelineResult relayAndTrials(PipelineResult first, const PipelineParams& params
 // of its faces), with 2-15 points fewer hexagons where they did (METHOD.md).
 PipelineResult withNoisyRepairs(PipelineResult first, const PipelineParams& params, const ProgressFn& progress,
                                 const CancelFlag* cancel) {
-  PipelineParams again = params;
+  PipelineParams again = laidAgainWith(params, first);
   again.noisyRepairs = true;
-  if (first.relay.globally) again.method = TriangulationMethod::Global;
-  if (globallyChosen(params, first)) again.method = TriangulationMethod::Global, again.globalBecause = first.globalBecause;
   if (progress) progress({"triangulate", 0, "laying again with the repairs of a smooth upload (the first lay fell short)"});
   PipelineResult::Relay relay = relayAfter(first);
   relay.globally = first.relay.globally;
@@ -3018,27 +3026,27 @@ PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progr
   // where up to kFoldRescueShare of the faces fold, kept where that reaches one (kFoldRescueShare).
   if (params.relay && params.foldFlips && kept.method == TriangulationMethod::Global && !reached(kept) &&
       params.foldRoundsShare < kFoldRescueShare) {
-    PipelineParams again = params;
+    PipelineParams again = laidAgainWith(params, kept);
     again.foldRoundsShare = kFoldRescueShare;
-    if (globallyChosen(params, kept)) again.method = TriangulationMethod::Global, again.globalBecause = kept.globalBecause;
-    if (progress) progress({"triangulate", 0, "laying again with the rounds against folds on every fold (no lay reached a P-Hex mesh)"});
-    PipelineResult second = layAndRelay(again, progress, cancel);
+    if (progress) progress({"triangulate", 0, "laying again with the rounds against folds on more folds (no lay reached a P-Hex mesh)"});
     std::ostringstream s;
     s.precision(2);
     s << "no lay reached a P-Hex mesh (planarity " << kept.metrics.planarityMax
       << "); laid again with the edge collapses and flips against folds run also where more than "
       << std::lround(100 * params.foldRoundsShare) << " % of the faces fold (up to " << std::lround(100 * kFoldRescueShare)
-      << " %), fewer hexagons for planar faces: ";
-    if (reached(second)) {
-      s << "it reached one (" << second.metrics.faceCount << " faces, " << nodesOfFourCut(second)
-        << " nodes of four faces from cuts): kept";
-      second.triangulation.notes.push_back(s.str());
-      second.totalMilliseconds += kept.totalMilliseconds;
-      kept = std::move(second);
-    } else {
-      s << "it did not reach one either: the first is kept";
-      kept.triangulation.notes.push_back(s.str());
-      kept.totalMilliseconds += second.totalMilliseconds;
+      << " %), fewer hexagons for planar faces";
+    std::optional<PipelineResult> second =
+        layAgainWith([&] { return layAndRelay(again, progress, cancel); }, kept, kept.relay, s.str(), "the first is");
+    if (second) {
+      const bool better = reached(*second);
+      s << (better ? ": it reached one (" + std::to_string(second->metrics.faceCount) + " faces, " +
+                         std::to_string(nodesOfFourCut(*second)) + " nodes of four faces from cuts): kept"
+                   : std::string(": it did not reach one either: the first is kept"));
+      PipelineResult& laid = better ? *second : kept;
+      laid.triangulation.notes.push_back(s.str());
+      const PipelineResult::Relay relay = laid.relay;
+      keepAfterRelay(laid, kept, *second, relay);
+      if (better) kept = std::move(*second);
     }
   }
   if (progress) progress({"done", 1, "done"});
