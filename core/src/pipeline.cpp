@@ -354,6 +354,10 @@ void validate(const PipelineParams& p) {
   if (!(p.mu >= 0 && p.mu <= 1e6)) fail("mu must be in [0, 1e6] (got " + number(p.mu) + ")");
   if (!(p.fairness >= 0 && p.fairness <= 1)) fail("fairness must be in [0, 1] (got " + number(p.fairness) + ")");
   if (!(p.cutShare >= 0 && p.cutShare <= 1)) fail("cutShare must be in [0, 1] (got " + number(p.cutShare) + ")");
+  if (!(p.foldRoundsShare >= 0 && p.foldRoundsShare <= 1))
+    fail("foldRoundsShare must be in [0, 1] (got " + number(p.foldRoundsShare) + ")");
+  if (p.foldAlignRounds < 0 || p.foldAlignRounds > 100)
+    fail("foldAlignRounds must be between 0 and 100 (got " + std::to_string(p.foldAlignRounds) + ")");
   if (p.maxIterations < 1 || p.maxIterations > 10000)
     fail("maxIterations must be between 1 and 10000 (got " + std::to_string(p.maxIterations) + ")");
   if (!(p.lowerBound >= 0 && p.lowerBound <= 2)) fail("lowerBound must be in [0, 2] (got " + number(p.lowerBound) + ")");

@@ -1095,6 +1095,18 @@ TEST_CASE("pipeline: where no lay reaches a P-Hex mesh, all is laid again with t
   p.foldRoundsShare = kFoldFlipShare;
   p.relay = false;
   CHECK_FALSE(runPipeline(p).solve.converged);
+  // The two settings (PipelineParams, not options of the command line or the library) out of range are named.
+  for (double bad : {-0.1, 1.5, std::nan("")}) {
+    p.foldRoundsShare = bad;
+    CHECK_THROWS_WITH(runPipeline(p), Catch::Contains("foldRoundsShare"));
+  }
+  p.foldRoundsShare = kFoldFlipShare;
+  for (int bad : {-1, 101}) {
+    p.foldAlignRounds = bad;
+    CHECK_THROWS_WITH(runPipeline(p), Catch::Contains("foldAlignRounds"));
+  }
+  p.foldAlignRounds = kAlignRounds;
+  CHECK_NOTHROW(validate(p));
 }
 
 // Where auto chose the global method for an upload, the pipeline's re-lays (relay, trial lays, the noisy repairs' lay)
