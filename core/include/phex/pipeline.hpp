@@ -28,7 +28,7 @@ constexpr double kCoverageGapGoal = 1.0;
 // The global method's second lay (PipelineParams::relay): the metric it follows, and the share of the faces beyond
 // which the first lay's cuts (two nodes of four faces per interior face cut, one per boundary panel) call for it.
 constexpr double kRelayAnisotropy = 2.5, kRelayFloor = 0.05, kRelayNodesOfFour = 0.05;
-// The rounds against folds that align before they merge (PipelineParams::foldAlignRounds; see pipeline.cpp).
+// The rounds against folds that align before they merge (PipelineParams::foldAlignRounds; see fold_rounds.cpp).
 constexpr int kAlignRounds = 3;
 // The rounds against folds run where at most kFoldFlipShare of the faces fold (PipelineParams::foldRoundsShare), and
 // where no lay reached a P-Hex mesh, all is laid again with kFoldRescueShare (runPipeline; see pipeline.cpp).
@@ -139,7 +139,7 @@ struct PipelineParams {
   // torus and the analytic bumps laid globally 23-88 % fewer cuts, a point or two of hexagons less (METHOD.md).
   bool foldFlips = true;
   // How many of those rounds first move a folded face's neighbour in line along the flatter principal direction
-  // before they merge (pipeline.cpp, kAlignRounds: 3). Not an option of the command line or the library: the tests
+  // before they merge (fold_rounds.cpp, kAlignRounds: 3). Not an option of the command line or the library: the tests
   // of cases chosen when it was 1 keep 1.
   int foldAlignRounds = kAlignRounds;
   // The largest share of the faces folded (in the dual solved with folds allowed) at which those rounds run; more
