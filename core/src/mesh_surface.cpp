@@ -4,6 +4,7 @@
 #include <optional>
 #include <array>
 #include <cmath>
+#include <initializer_list>
 #include <cstdio>
 #include <limits>
 #include <numeric>
@@ -630,7 +631,7 @@ MeshSurface::VertexFit MeshSurface::fitVertex(int v, int minRings, const std::ve
   return out;
 }
 
-TriMesh MeshSurface::refined(int k) const {
+TriMesh MeshSurface::refined(int k, Blend blending) const {
   const int nv = vertexCount(), nf = static_cast<int>(mesh_.F.rows());
   if (k < 1) throw Error(ErrorCode::InvalidParameter, "refinement level must be at least 1");
   if (double(nf) * k * k > double(kMaxRefinedTriangles))
@@ -659,10 +660,57 @@ TriMesh MeshSurface::refined(int k) const {
     for (int i = 1; i < j.terms; ++i) z += j.coefficient[i] * row[i];
     return p + u * t1 + w * t2 + (z / j.scale) * n;
   };
+  const bool smooth = blending == Blend::Smooth;
+  // Each vertex's jet reaches kBlendReach of its longest edge, its weight falling smoothly to 0 there.
+  std::vector<double> reach(nv, 0.0);
+  for (int a = 0; a < nv; ++a)
+    for (int j = neighbourStart_[a]; j < neighbourStart_[a + 1]; ++j)
+      reach[a] = std::max(reach[a], kBlendReach * (mesh_.V.row(a) - mesh_.V.row(neighbours_[j])).norm());
+  const double farthestReach = nv > 0 ? *std::max_element(reach.begin(), reach.end()) : 0.0;
+  // The vertices whose jets may reach a point between `ids` (a triangle, an edge or a vertex, within `radius` of
+  // `centre`): those within their reach of that ball, found through the vertices within the farthest reach of it
+  // (so that neighbouring triangles find the same jets at their common points: a count of rings missed the long
+  // edges' far-reaching jets of an uneven upload, and the refinement creased between triangles by 67 degrees).
+  std::vector<int> stamp(nv, -1), near, seen;
+  int gathered = 0;
+  auto gather = [&](std::initializer_list<int> ids) {
+    ++gathered;
+    near.clear();
+    if (!smooth) return;
+    seen.clear();
+    Vec3 centre = Vec3::Zero();
+    for (int c : ids) centre += mesh_.V.row(c).transpose() / double(ids.size());
+    double radius = 0;
+    for (int c : ids) radius = std::max(radius, (Vec3(mesh_.V.row(c).transpose()) - centre).norm());
+    for (int c : ids)
+      if (stamp[c] != gathered) stamp[c] = gathered, seen.push_back(c);
+    for (std::size_t i = 0; i < seen.size(); ++i) {
+      const int u = seen[i];
+      const double d = (Vec3(mesh_.V.row(u).transpose()) - centre).norm();
+      if (d < radius + reach[u]) near.push_back(u);
+      if (!(d < radius + farthestReach)) continue;
+      for (int j = neighbourStart_[u]; j < neighbourStart_[u + 1]; ++j)
+        if (const int w = neighbours_[j]; stamp[w] != gathered) stamp[w] = gathered, seen.push_back(w);
+    }
+  };
+  // The point at barycentric coordinates b of the triangle (or edge, or vertex) `ids`, whose jets' vertices are
+  // gathered: its projections onto the jets that reach it, weighted by Wendland's C2 function of the distance over
+  // the reach. The weights are smooth in space where barycentric ones kink at every edge.
   auto blend = [&](const int ids[3], const double b[3]) {
     Vec3 x = Vec3::Zero();
     for (int c = 0; c < 3; ++c) x += b[c] * mesh_.V.row(ids[c]).transpose();
     Vec3 q = Vec3::Zero();
+    double total = 0;
+    for (int v : near) {
+      const double d = (x - Vec3(mesh_.V.row(v).transpose())).norm() / reach[v];
+      if (!(d < 1)) continue;
+      const double w = (1 - d) * (1 - d) * (1 - d) * (1 - d) * (4 * d + 1);
+      q += w * onJet(v, x);
+      total += w;
+    }
+    if (total > 0) return Vec3(q / total);
+    // Barycentric (or reached by no jet: a degenerate triangle).
+    q.setZero();
     for (int c = 0; c < 3; ++c)
       if (b[c] > 0) q += b[c] * onJet(ids[c], x);
     return q;
@@ -677,13 +725,19 @@ TriMesh MeshSurface::refined(int k) const {
   const std::size_t inner = static_cast<std::size_t>(k - 1) * (k - 2) / 2;
   TriMesh out;
   out.V.resize(nv + edgeCount * (k - 1) + static_cast<Eigen::Index>(nf * inner), 3);
-  out.V.topRows(nv) = mesh_.V;
+  for (int a = 0; a < nv; ++a) {
+    const int ids[3] = {a, a, a};
+    const double b[3] = {1.0, 0.0, 0.0};
+    gather({a});
+    out.V.row(a) = blend(ids, b).transpose();
+  }
   Eigen::Index next = nv;
   for (int a = 0; a < nv; ++a)
     for (int j = neighbourStart_[a]; j < neighbourStart_[a + 1]; ++j) {
       if (neighbours_[j] < a) continue;
       edgeFirst[j] = static_cast<int>(next);
       const int ids[3] = {a, neighbours_[j], a};
+      gather({a, neighbours_[j]});
       for (int i = 1; i < k; ++i) {
         const double b[3] = {double(k - i) / k, double(i) / k, 0.0};
         out.V.row(next++) = blend(ids, b).transpose();
@@ -700,6 +754,7 @@ TriMesh MeshSurface::refined(int k) const {
   std::vector<int> lattice(static_cast<std::size_t>(k + 1) * (k + 1));
   for (int f = 0; f < nf; ++f) {
     const int ids[3] = {mesh_.F(f, 0), mesh_.F(f, 1), mesh_.F(f, 2)};
+    gather({ids[0], ids[1], ids[2]});
     // Point (i, j): a + i / k (b - a) + j / k (c - a).
     auto at = [&](int i, int j) -> int& { return lattice[static_cast<std::size_t>(j) * (k + 1) + i]; };
     for (int j = 0; j <= k; ++j)

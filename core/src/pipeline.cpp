@@ -226,7 +226,7 @@ std::shared_ptr<const MeshSurface> uploadedSurface(const MeshInput& in, bool& re
 // sampled 24 x 24 (1152 triangles) stalled at 2e-3 at 3000 faces (exit 2), a wave 12 x 12 ended 1.5 % of the
 // diagonal off at 1000 faces. Where its triangles are over kCoarseUpload cells in size (TriMesh::triangleSize: by
 // the mean edge, 0.2 x 0.02 triangles on a 20 m vault were refined 4 x 4 for nothing, three times the time), the
-// lay runs on the upload refined into a smooth surface through its vertices (MeshSurface::refined), k x k per
+// lay runs on the upload refined into a smooth surface near its vertices (MeshSurface::refined), k x k per
 // triangle for edges of about kRefinedEdge of a cell.
 constexpr double kCoarseUpload = 1.5, kRefinedEdge = 0.5;
 // An uneven upload (its edges' 90th percentile over kUnevenSpread times their 10th: a marching-tetrahedra mesh, slivers
@@ -308,7 +308,9 @@ std::shared_ptr<const MeshSurface> refinedUpload(const std::shared_ptr<const Mes
     if (cache.surface == coarse && cache.refined && cache.refinedBy == k) return cache.refined;
     if (cache.surface == coarse) cache.refined.reset();
   }
-  auto made = std::make_shared<MeshSurface>(coarse->refined(k), coarse->name());
+  // An uneven upload's slivers would turn over under the smooth blend's moved vertices (MeshSurface::Blend).
+  const MeshSurface::Blend blend = unevenEdges(coarse->mesh()) ? MeshSurface::Blend::Barycentric : MeshSurface::Blend::Smooth;
+  auto made = std::make_shared<MeshSurface>(coarse->refined(k, blend), coarse->name());
   made->setRefinement(coarse->mesh(), k);
   std::shared_ptr<const MeshSurface> refined = std::move(made);
   const std::lock_guard<std::mutex> lock(cache.mutex);
@@ -1100,9 +1102,11 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
                "upload a finer mesh for panels that follow the surface";
         } else {
           t.surface = refined;
-          s << "laid on a smooth surface through its " << upload->vertexCount() << " vertices, each of its "
-            << upload->mesh().F.rows() << " triangles split " << k << " x " << k
-            << " onto the cubic fits around its corners, so that panels need not bend over its facets' edges";
+          const bool uneven = unevenEdges(upload->mesh());
+          s << "laid on a smooth surface " << (uneven ? "through" : "near") << " its " << upload->vertexCount()
+            << " vertices, each of its " << upload->mesh().F.rows() << " triangles split " << k << " x " << k
+            << (uneven ? " onto the cubic fits around its corners" : " onto the smooth blend of the cubic fits around its vertices")
+            << ", so that panels need not bend over its facets' edges";
         }
         surfaceNote = s.str();
       }

@@ -842,15 +842,18 @@ TEST_CASE("pipeline: a global solve that cut far more faces than its dual folds 
 }
 
 // The unguarded solve can leave a node far off where three planes pass through nearly one line (the surface fit
-// cannot move such a node): put back on the surface and solved again, the bubble at 3500 faces (anisotropy 1.5,
-// without the fairness; its farthest node 0.47 % of the diagonal off) ends 0.09 % off with 13 faces cut, unguarded.
+// cannot move such a node): put back on the surface and solved again, the bubble at 3500 faces (anisotropy 1.499,
+// without the fairness) ends 0.10 % off with 2 faces cut, unguarded (the result does not say how many nodes were put
+// back: the test asserts the unguarded solve kept within the goal).
 // On the 80 bubbles of 1500-6000 faces at anisotropies 1.497-1.5 (alignment 0.999 and 1) so solved (the rounds
 // against folds flipping folded boundary fans of three), 13 of the 15 kept unguarded had far nodes put back. (The test stood at 4000 faces, anisotropy 1.499, until the rounds against
 // folds took folded boundary panels too; at 4500 faces, anisotropy 1.498, until they solved only around their
 // changes, before that at 4000 faces, until their merges chose among neighbours about as well along the flatter
-// direction, and at 3000 faces until their first round aligned before it merged.)
+// direction, and at 3000 faces until their first round aligned before it merged; at anisotropy 1.5 until the bubble
+// was refined by the smooth blend of its jets, MeshSurface::Blend: of 60 configurations scanned then, 1500-6000
+// faces, anisotropy 1.498-1.5, alignment 0.999 and 1, nine keep the unguarded solve, all within the distance goal.)
 TEST_CASE("pipeline: far nodes of the unguarded solve are put back on the surface and solved again") {
-  const PipelineResult r = bubbleGlobal(3500, PipelineParams().alignment, 1.5, 0.0);
+  const PipelineResult r = bubbleGlobal(3500, PipelineParams().alignment, 1.499, 0.0);
   checkSolvedNear(r);
   CHECK(r.foldsAllowed);
   CHECK(r.interiorFacesSplit < 30);
@@ -1175,7 +1178,7 @@ TEST_CASE("pipeline: a noisy upload whose facets turn sharply is refined, not ta
   std::string notes;
   for (const std::string& n : r.triangulation.notes) notes += n + "\n";
   INFO(notes);
-  CHECK(notes.find("laid on a smooth surface through its 750 vertices") != std::string::npos);
+  CHECK(notes.find("laid on a smooth surface near its 750 vertices") != std::string::npos);
   CHECK(notes.find("too coarse to be refined") == std::string::npos);
 }
 

@@ -504,7 +504,7 @@ FieldMesh fieldMesh(const Surface& surface, double edge, double anisotropy, doub
     std::vector<int> kept;
     const bool thinning = double(fine.V.rows()) > kThinAbove * wanted;
     // What is remeshed: the upload, also where it was refined into a smooth surface (MeshSurface::refined: its first
-    // vertices are the upload's), its points then found on that surface. The refinement keeps an uneven upload's
+    // vertices are the upload's, moved onto the blend), its points then found on that surface. The refinement keeps an uneven upload's
     // long edges among short ones: the generated genus 1 (36k vertices) refined 3 x 3 at 100k faces laid its field on
     // 1.9M field-mesh vertices, 3.6 times those its area needs (27.5 s, 1.6 GB).
     const MeshSurface::Refinement& from = mesh->refinement();
