@@ -159,6 +159,8 @@ async function runDataModel(name, faces) {
 
 test('wasm and native CLI give the same noisy upload, laid again with the repairs', { skip: noCli }, async () => {
   const { file, params, r } = await runDataModel('phcpf_six_s0.off', 1500);
+  // Laid on its refinement by the smooth blend of its vertices' jets (MeshSurface::Blend::Smooth), the same in both.
+  assert.ok(r.triangulation.notes.some((note) => /onto the smooth blend of the cubic fits around its vertices/.test(note)), r.triangulation.notes.join('\n'));
   assert.ok(r.relay.noisyRepairs && r.relay.noisyRepairsKept, JSON.stringify(r.relay));
   assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
   assert.ok(r.triangulation.notes.some((note) => /laid again with them, as a smooth upload is, it reached one/.test(note)), r.triangulation.notes.join('\n'));
