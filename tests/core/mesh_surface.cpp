@@ -629,6 +629,24 @@ TEST_CASE("mesh_surface: a coarse mesh refined onto its vertices' cubic jets fol
   CHECK_THROWS_AS(small.refined(200), Error);  // 128 x 200^2 triangles: over kMaxRefinedTriangles
 }
 
+// A corner pulled far out of a fair grid: its long edges' jets reach far, and every triangle's search for the jets
+// that reach it went over the whole mesh (72 s for a 128 x 128 grid; kBlendReachSpread holds such reaches). On a
+// 64 x 64 dome: the refinement is finite, and away from the pulled corner it follows the dome as on the fair grid.
+TEST_CASE("mesh_surface: a far-reaching edge does not spread the refinement's blend over the whole mesh") {
+  const auto dome = [](double x, double y) { return 0.5 - 0.25 * (x * x + y * y); };
+  TriMesh m = heightGrid(64, dome);
+  m.V.row(0) << -30, -1, 0;
+  const MeshSurface surface(m, "pulled");
+  const TriMesh fine = surface.refined(2);
+  REQUIRE(fine.V.allFinite());
+  double off = 0;
+  for (Eigen::Index v = 0; v < fine.V.rows(); ++v) {
+    const Vec3 p = fine.V.row(v);
+    if (std::max(std::abs(p.x()), std::abs(p.y())) < 0.8) off = std::max(off, std::abs(p.z() - dome(p.x(), p.y())));
+  }
+  CHECK(off < 1e-6);  // 2.5e-8
+}
+
 TEST_CASE("mesh_surface: the refinement of a coarse mesh is smooth across its triangles' edges") {
   // A surface smooth across the coarse edges turns between neighbouring refined triangles by an angle that halves
   // as k doubles; one that kinks there (a blend by barycentric weights: its tangent planes differ on either side

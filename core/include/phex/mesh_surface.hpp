@@ -133,7 +133,7 @@ class MeshSurface : public Surface {
   enum class Blend { Smooth, Barycentric };
   TriMesh refined(int k, Blend blend = Blend::Smooth) const;
   static constexpr std::size_t kMaxRefinedTriangles = std::size_t(1) << 20;  // 1,048,576
-  static constexpr double kBlendReach = 1.35;
+  static constexpr double kBlendReach = 1.35, kBlendReachSpread = 3.0;
 
   // A surface made of another's refined(k): that mesh's triangles and vertex count (its vertices are this mesh's
   // first ones) and k, for what is smooth at its scale (the global method's cell scale is solved on it: on a
