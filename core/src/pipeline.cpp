@@ -280,9 +280,10 @@ namespace {
 // Neither a plane (nothing to smooth) nor a mesh with a sharp crease (which the jets would round off: it gets
 // its note instead); a low-poly mesh whose facets turn by 30 degrees here and there, about as much as
 // elsewhere, is refined.
-int refinementFor(const MeshSurface& mesh, double size, double cell) {
+// `uneven`: unevenEdges(mesh.mesh()), which the caller computes once.
+int refinementFor(const MeshSurface& mesh, double size, double cell, bool uneven) {
   if (mesh.planar() || creased(mesh) || !(cell > 0) || !(size > kCoarseUneven * cell)) return 1;
-  if (!(size > kCoarseUpload * cell) && !unevenEdges(mesh.mesh())) return 1;
+  if (!(size > kCoarseUpload * cell) && !uneven) return 1;
   const double most = std::floor(std::sqrt(double(MeshSurface::kMaxRefinedTriangles) / double(mesh.mesh().F.rows())));
   const int smooth = static_cast<int>(std::clamp(std::ceil(size / (kRefinedEdge * cell)), 1.0, std::max(1.0, most)));
   // The global method's field mesh splits the refined triangles again, j x j (globalFieldSplit), so its edge is the
@@ -300,16 +301,16 @@ int refinementFor(const MeshSurface& mesh, double size, double cell) {
   return best;
 }
 
-// The cached upload `coarse` refined k x k (kept with it for the next run).
-std::shared_ptr<const MeshSurface> refinedUpload(const std::shared_ptr<const MeshSurface>& coarse, int k) {
+// The cached upload `coarse` refined k x k by `blend` (kept with it for the next run). An uneven upload's slivers
+// would turn over under the smooth blend's moved vertices, so it takes the barycentric one (MeshSurface::Blend).
+std::shared_ptr<const MeshSurface> refinedUpload(const std::shared_ptr<const MeshSurface>& coarse, int k,
+                                                 MeshSurface::Blend blend) {
   UploadCache& cache = uploadCache();
   {
     const std::lock_guard<std::mutex> lock(cache.mutex);
-    if (cache.surface == coarse && cache.refined && cache.refinedBy == k) return cache.refined;
+    if (cache.surface == coarse && cache.refined && cache.refinedBy == k) return cache.refined;  // blend: the upload's
     if (cache.surface == coarse) cache.refined.reset();
   }
-  // An uneven upload's slivers would turn over under the smooth blend's moved vertices (MeshSurface::Blend).
-  const MeshSurface::Blend blend = unevenEdges(coarse->mesh()) ? MeshSurface::Blend::Barycentric : MeshSurface::Blend::Smooth;
   auto made = std::make_shared<MeshSurface>(coarse->refined(k, blend), coarse->name());
   made->setRefinement(coarse->mesh(), k);
   std::shared_ptr<const MeshSurface> refined = std::move(made);
@@ -1085,8 +1086,10 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       if (params.start) *params.start -= origin;
       const double cellAsked = params.cell > 0 ? params.cell : cellForFaceCount(*upload, params.faces);
       const double size = upload->mesh().triangleSize();
-      if (const int k = refinementFor(*upload, size, cellAsked); k > 1) {
-        const std::shared_ptr<const MeshSurface> refined = refinedUpload(upload, k);
+      const bool uneven = unevenEdges(upload->mesh());
+      if (const int k = refinementFor(*upload, size, cellAsked, uneven); k > 1) {
+        const std::shared_ptr<const MeshSurface> refined =
+            refinedUpload(upload, k, uneven ? MeshSurface::Blend::Barycentric : MeshSurface::Blend::Smooth);
         std::ostringstream s;
         s.precision(3);
         s << "the uploaded mesh is coarse for this lay (its triangles' size " << size
@@ -1102,7 +1105,6 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
                "upload a finer mesh for panels that follow the surface";
         } else {
           t.surface = refined;
-          const bool uneven = unevenEdges(upload->mesh());
           s << "laid on a smooth surface " << (uneven ? "through" : "near") << " its " << upload->vertexCount()
             << " vertices, each of its " << upload->mesh().F.rows() << " triangles split " << k << " x " << k
             << (uneven ? " onto the cubic fits around its corners" : " onto the smooth blend of the cubic fits around its vertices")
