@@ -57,7 +57,7 @@ Options of `phex run`:
   --anisotropy A            global: largest ratio of the Dupin metric's axes followed, 1..8 (default 2;
                             1 gives triangles equilateral in space)
   --alignment W             global: weight of the alignment with the flatter principal direction, 0..10
-                            (default 1; 0 leaves the field free but for the boundary; on smooth surfaces
+                            (default 3; 0 leaves the field free but for the boundary; on smooth surfaces
                             a stronger pull often cuts fewer faces next to parabolic curves)
   --curvature-sizing S      global: how far the cell follows the curvature, 0..1 (default 0: uniform)
   --curvature-floor F       global: where |curvature| is small the metric tends to the isotropic one: each

@@ -18,7 +18,7 @@ test("the API offers method 'global' and documents its options with their defaul
   assert.equal(caps.globalOptions, true);
   const spec = Object.fromEntries(PARAMETERS.map((p) => [p.name, p]));
   assert.ok(spec.method.values.includes('global'));
-  for (const [name, value, min, max] of [['anisotropy', 2, 1, 8], ['alignment', 1, 0, 10], ['curvatureSizing', 0, 0, 1], ['curvatureFloor', 0.25, 0.01, 1], ['fairness', 0.03, 0, 1]]) {
+  for (const [name, value, min, max] of [['anisotropy', 2, 1, 8], ['alignment', 3, 0, 10], ['curvatureSizing', 0, 0, 1], ['curvatureFloor', 0.25, 0.01, 1], ['fairness', 0.03, 0, 1]]) {
     assert.deepEqual([spec[name].default, spec[name].min, spec[name].max], [value, min, max], name);
     assert.match(spec[name].description, /global/, name);
   }

@@ -118,7 +118,7 @@ struct PipelineParams {
   // the curvature floor under which the metric tends to the isotropic one, as a share of the surface's median
   // largest |curvature|, in [0.01, 1].
   double anisotropy = 2.0;
-  double alignment = 1.0;
+  double alignment = 3.0;  // GlobalOptions::alignment
   double curvatureSizing = 0.0;
   double curvatureFloor = 0.25;
   // The global method laid again, following the Dupin metric further (anisotropy kRelayAnisotropy, curvature floor
