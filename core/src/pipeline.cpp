@@ -2285,7 +2285,8 @@ PipelineResult relayed(PipelineResult first, const PipelineParams& params, Pipel
 }
 
 // Where the lay kept (`best`, laid by `laidWith`) still has nodes of four faces from cuts and at most kTrialMostFaces
-// faces were asked for, it is laid again for each of kTrialShares of the faces (a cell given: the cell scaled as
+// faces were asked for (or at most kTrialLargeFaces, where those nodes are over kTrialLargeShare of them: a lay costs
+// seconds there, and a few nodes from boundary panels cut do not pay for two), it is laid again for each of kTrialShares of the faces (a cell given: the cell scaled as
 // that would), stopping at one without such nodes; kept: the one that reached a P-Hex mesh, then covering the
 // surface within the coverage goal, then with fewer nodes of four, then more hexagons, among those within
 // kTrialCountMiss of the faces asked. The global method's cuts come from a few places where the lattice falls
@@ -2296,7 +2297,8 @@ constexpr double kTrialCountMiss = 0.1;  // the goal: the face count within 10 %
 PipelineResult withTrials(PipelineResult best, const PipelineParams& params, const PipelineParams& laidWith,
                           const ProgressFn& progress, const CancelFlag* cancel) {
   const int size = params.cell > 0 ? best.metrics.faceCount : params.faces;  // a cell given: the faces it gave
-  if (nodesOfFourCut(best) == 0 || size > kTrialMostFaces || size <= 0) return best;
+  const bool many = nodesOfFourCut(best) > kTrialLargeShare * size;
+  if (nodesOfFourCut(best) == 0 || size > (many ? kTrialLargeFaces : kTrialMostFaces) || size <= 0) return best;
   auto countOk = [&](const PipelineResult& r) {
     return params.cell > 0 || std::abs(r.metrics.faceCount - params.faces) <= kTrialCountMiss * params.faces;
   };

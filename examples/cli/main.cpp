@@ -73,8 +73,9 @@ Options of `phex run`:
                             mean panel edge from any panel, cut faces, or reach no P-Hex mesh: tile it by
                             the global method and keep that where it reaches one covering the upload more
                             closely or, both within a panel edge, with fewer nodes of four faces from cuts;
-                            then, at up to 5000 faces, where the global lay kept still has nodes of four from
-                            cuts, lay it again for 3 % fewer and more faces and keep the best (report: relay)
+                            then, at up to 5000 faces (10000 where they are over 0.25 % of the faces), where
+                            the global lay kept still has nodes of four from cuts, lay it again for 3 % fewer
+                            and more faces and keep the best (report: relay)
                             (default on)
   --fold-flips on|off       global: where the dual solved with folds allowed has faces crossing themselves
                             (at most 8 % of them), merge each one's vertex with its neighbour along the

@@ -1036,10 +1036,40 @@ TEST_CASE("pipeline: where the global lay's cuts leave nodes of four faces, tria
   CHECK(std::abs(r.metrics.faceCount - p.faces) <= 0.1 * p.faces);
   CHECK(notes.find("laid again as trials") != std::string::npos);
   CHECK(r.totalMilliseconds >= once.totalMilliseconds * 0.5);
-  // Over kTrialMostFaces faces none runs (each lay there costs what the goals' time allows for one).
+  // Over kTrialMostFaces faces none runs where the cuts' nodes of four are few (each lay there costs what the goals'
+  // time allows for one), and over kTrialLargeFaces none at all.
   p.faces = kTrialMostFaces + 1000;
   p.relay = true;
   CHECK(runPipeline(p).relay.trials == 0);
+  p.faces = kTrialLargeFaces + 1000;
+  CHECK(runPipeline(p).relay.trials == 0);
+}
+
+// Between kTrialMostFaces and kTrialLargeFaces faces the trial lays run where the cuts' nodes of four are more than
+// kTrialLargeShare of the faces: PH-CPF's car (tests/data, CC BY-SA 4.0) at 8000 faces cuts 27 interior faces laid
+// once (54 nodes of four), its trial for 7760 faces 8; six_s0 at 6000 faces cuts 1 interior face and 2 boundary panels
+// (4 nodes of four, under the share) and is laid once.
+TEST_CASE("pipeline: over kTrialMostFaces faces, trial lays run where the cuts' nodes of four are many") {
+  PipelineParams p;
+  p.mesh = upload("phcpf_car_r.off");
+  p.faces = 8000;
+  const PipelineResult car = runPipeline(p);
+  std::string notes;
+  for (const std::string& note : car.triangulation.notes) notes += note + "\n";
+  INFO(notes);
+  REQUIRE(car.relay.trialNodesOfFour > kTrialLargeShare * p.faces);
+  CHECK(car.relay.trials >= 1);
+  CHECK(2 * car.interiorFacesSplit + car.boundaryPanelsSplit < car.relay.trialNodesOfFour);
+  CHECK(car.solve.converged);
+  CHECK(car.metrics.planarityMax <= 1e-9);
+  CHECK(std::abs(car.metrics.faceCount - p.faces) <= 0.1 * p.faces);
+  p.mesh = upload("phcpf_six_s0.off");
+  p.faces = 6000;
+  const PipelineResult six = runPipeline(p);
+  const int four = 2 * six.interiorFacesSplit + six.boundaryPanelsSplit;
+  CHECK(four > 0);
+  CHECK(four <= kTrialLargeShare * p.faces);
+  CHECK(six.relay.trials == 0);
 }
 
 // A noisy upload's first lay leaves out the repairs that trade hexagons for cuts on such meshes (the fairness, the

@@ -35,8 +35,11 @@ constexpr int kAlignRounds = 3;
 constexpr double kFoldFlipShare = 0.08, kFoldRescueShare = 0.25;
 // The global method's trial lays (PipelineParams::relay): where the lay kept still has nodes of four faces from
 // cuts, at up to kTrialMostFaces faces, it is laid again for kTrialShares of the faces (its lattice then falls
-// otherwise around the few places where the solve had to cut) and the best is kept.
-constexpr int kTrialMostFaces = 5000;
+// otherwise around the few places where the solve had to cut) and the best is kept; at up to kTrialLargeFaces where
+// those nodes are more than kTrialLargeShare of the faces (since stop 30: six_s0 at 10000 faces 79 -> 7 nodes of
+// four, the car 36 -> 10; the bench's upload at 10k faces, 3 from boundary panels cut, is laid once).
+constexpr int kTrialMostFaces = 5000, kTrialLargeFaces = 10000;
+constexpr double kTrialLargeShare = 0.0025;
 constexpr double kTrialShares[] = {0.97, 1.03};
 
 // How the triangulation is laid (§5, §7).
@@ -128,7 +131,8 @@ struct PipelineParams {
   // On a near-developable surface the flatter curvature decides which triangles are valid (Props. 4, 5), and the
   // regularized metric follows too little of it: a shallow elliptic paraboloid (radii 1 and 30) laid globally
   // stalls at 1000 and 5000 faces or cuts 273 faces at 3000, and converges with 3-22 cut laid again (METHOD.md).
-  // Then, at up to kTrialMostFaces faces, where the lay kept still has nodes of four faces from cuts: laid again
+  // Then, at up to kTrialMostFaces faces (kTrialLargeFaces where they are over kTrialLargeShare of the faces), where
+  // the lay kept still has nodes of four faces from cuts: laid again
   // for kTrialShares of the faces (or the cell scaled so), and the best kept (PipelineResult::Relay::trials).
   bool relay = true;
   // The global method's triangulation: where its dual, solved with folds allowed, has faces crossing themselves
