@@ -1086,7 +1086,8 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       if (params.start) *params.start -= origin;
       const double cellAsked = params.cell > 0 ? params.cell : cellForFaceCount(*upload, params.faces);
       const double size = upload->mesh().triangleSize();
-      const bool uneven = unevenEdges(upload->mesh());
+      // (Measured only where refinementFor may refine: a pass over every edge of a fine upload is not free.)
+      const bool uneven = size > kCoarseUneven * cellAsked && unevenEdges(upload->mesh());
       if (const int k = refinementFor(*upload, size, cellAsked, uneven); k > 1) {
         const std::shared_ptr<const MeshSurface> refined =
             refinedUpload(upload, k, uneven ? MeshSurface::Blend::Barycentric : MeshSurface::Blend::Smooth);
@@ -2286,10 +2287,10 @@ PipelineResult relayed(PipelineResult first, const PipelineParams& params, Pipel
 
 // Where the lay kept (`best`, laid by `laidWith`) still has nodes of four faces from cuts and at most kTrialMostFaces
 // faces were asked for (or at most kTrialLargeFaces, where those nodes are over kTrialLargeShare of them: a lay costs
-// seconds there, and a few nodes from boundary panels cut do not pay for two), it is laid again for each of kTrialShares of the faces (a cell given: the cell scaled as
-// that would), stopping at one without such nodes; kept: the one that reached a P-Hex mesh, then covering the
-// surface within the coverage goal, then with fewer nodes of four, then more hexagons, among those within
-// kTrialCountMiss of the faces asked. The global method's cuts come from a few places where the lattice falls
+// seconds there, and a few nodes from boundary panels cut do not pay for two), it is laid again for each of
+// kTrialShares of the faces (a cell given: the cell scaled as that would), stopping at one without such nodes; kept:
+// the one that reached a P-Hex mesh, then covering the surface within the coverage goal, then with fewer nodes of
+// four, then more hexagons, among those within kTrialCountMiss of the faces asked. The global method's cuts come from a few places where the lattice falls
 // badly against the surface (next to parabolic curves, around a handle a few cells across), and its lattice falls
 // otherwise at a face count a few percent off: on the generated genus 0-3 and ten clean surfaces at 1000-5000
 // faces (52 runs), nodes of four 238 -> 72 (METHOD.md). The time is each lay's, summed.
