@@ -279,11 +279,17 @@ namespace {
 // How finely to refine `mesh`, whose triangles are of `size` (TriMesh::triangleSize), for `cell` (1: not at all).
 // Neither a plane (nothing to smooth) nor a mesh with a sharp crease (which the jets would round off: it gets
 // its note instead); a low-poly mesh whose facets turn by 30 degrees here and there, about as much as
-// elsewhere, is refined.
-// `uneven`: unevenEdges(mesh.mesh()), which the caller computes once.
-int refinementFor(const MeshSurface& mesh, double size, double cell, bool uneven) {
-  if (mesh.planar() || creased(mesh) || !(cell > 0) || !(size > kCoarseUneven * cell)) return 1;
-  if (!(size > kCoarseUpload * cell) && !uneven) return 1;
+// elsewhere, is refined. With the blend it is refined by: an uneven upload's slivers would turn over under the
+// smooth blend's moved vertices, so it takes the barycentric one (MeshSurface::Blend).
+struct Refinement {
+  int k = 1;
+  MeshSurface::Blend blend = MeshSurface::Blend::Smooth;
+};
+Refinement refinementFor(const MeshSurface& mesh, double size, double cell) {
+  if (mesh.planar() || creased(mesh) || !(cell > 0) || !(size > kCoarseUneven * cell)) return {};
+  const bool uneven = unevenEdges(mesh.mesh());  // a pass over every edge: only where a refinement may follow
+  if (!(size > kCoarseUpload * cell) && !uneven) return {};
+  const MeshSurface::Blend blend = uneven ? MeshSurface::Blend::Barycentric : MeshSurface::Blend::Smooth;
   const double most = std::floor(std::sqrt(double(MeshSurface::kMaxRefinedTriangles) / double(mesh.mesh().F.rows())));
   const int smooth = static_cast<int>(std::clamp(std::ceil(size / (kRefinedEdge * cell)), 1.0, std::max(1.0, most)));
   // The global method's field mesh splits the refined triangles again, j x j (globalFieldSplit), so its edge is the
@@ -294,24 +300,23 @@ int refinementFor(const MeshSurface& mesh, double size, double cell, bool uneven
   // kRefineChoices finer refinements, the one whose field mesh's edge comes nearest (by ratio), the first of those.
   const double median = mesh.mesh().medianEdgeLength(), edge = globalFieldEdge(mesh, cell);
   auto away = [&](int k) { return std::abs(std::log(median / (k * globalFieldSplit(median / k, edge)) / edge)); };
-  if (away(smooth) <= std::log(kFieldEdgeRange)) return smooth;
+  if (away(smooth) <= std::log(kFieldEdgeRange)) return {smooth, blend};
   int best = smooth;
   for (int k = smooth + 1; k <= std::min(static_cast<int>(most), smooth + kRefineChoices); ++k)
     if (away(k) < away(best)) best = k;
-  return best;
+  return {best, blend};
 }
 
-// The cached upload `coarse` refined k x k by `blend` (kept with it for the next run). An uneven upload's slivers
-// would turn over under the smooth blend's moved vertices, so it takes the barycentric one (MeshSurface::Blend).
-std::shared_ptr<const MeshSurface> refinedUpload(const std::shared_ptr<const MeshSurface>& coarse, int k,
-                                                 MeshSurface::Blend blend) {
+// The cached upload `coarse` refined as `by` says (kept with it for the next run).
+std::shared_ptr<const MeshSurface> refinedUpload(const std::shared_ptr<const MeshSurface>& coarse, Refinement by) {
+  const int k = by.k;
   UploadCache& cache = uploadCache();
   {
     const std::lock_guard<std::mutex> lock(cache.mutex);
     if (cache.surface == coarse && cache.refined && cache.refinedBy == k) return cache.refined;  // blend: the upload's
     if (cache.surface == coarse) cache.refined.reset();
   }
-  auto made = std::make_shared<MeshSurface>(coarse->refined(k, blend), coarse->name());
+  auto made = std::make_shared<MeshSurface>(coarse->refined(k, by.blend), coarse->name());
   made->setRefinement(coarse->mesh(), k);
   std::shared_ptr<const MeshSurface> refined = std::move(made);
   const std::lock_guard<std::mutex> lock(cache.mutex);
@@ -1086,11 +1091,10 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
       if (params.start) *params.start -= origin;
       const double cellAsked = params.cell > 0 ? params.cell : cellForFaceCount(*upload, params.faces);
       const double size = upload->mesh().triangleSize();
-      // (Measured only where refinementFor may refine: a pass over every edge of a fine upload is not free.)
-      const bool uneven = size > kCoarseUneven * cellAsked && unevenEdges(upload->mesh());
-      if (const int k = refinementFor(*upload, size, cellAsked, uneven); k > 1) {
-        const std::shared_ptr<const MeshSurface> refined =
-            refinedUpload(upload, k, uneven ? MeshSurface::Blend::Barycentric : MeshSurface::Blend::Smooth);
+      if (const Refinement by = refinementFor(*upload, size, cellAsked); by.k > 1) {
+        const int k = by.k;
+        const bool uneven = by.blend == MeshSurface::Blend::Barycentric;
+        const std::shared_ptr<const MeshSurface> refined = refinedUpload(upload, by);
         std::ostringstream s;
         s.precision(3);
         s << "the uploaded mesh is coarse for this lay (its triangles' size " << size
@@ -1108,7 +1112,8 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
           t.surface = refined;
           s << "laid on a smooth surface " << (uneven ? "through" : "near") << " its " << upload->vertexCount()
             << " vertices, each of its " << upload->mesh().F.rows() << " triangles split " << k << " x " << k
-            << (uneven ? " onto the cubic fits around its corners" : " onto the smooth blend of the cubic fits around its vertices")
+            << (uneven ? " onto the cubic fits around its corners"
+                       : " onto the smooth blend of the cubic fits around its vertices")
             << ", so that panels need not bend over its facets' edges";
         }
         surfaceNote = s.str();
@@ -2290,10 +2295,11 @@ PipelineResult relayed(PipelineResult first, const PipelineParams& params, Pipel
 // seconds there, and a few nodes from boundary panels cut do not pay for two), it is laid again for each of
 // kTrialShares of the faces (a cell given: the cell scaled as that would), stopping at one without such nodes; kept:
 // the one that reached a P-Hex mesh, then covering the surface within the coverage goal, then with fewer nodes of
-// four, then more hexagons, among those within kTrialCountMiss of the faces asked. The global method's cuts come from a few places where the lattice falls
-// badly against the surface (next to parabolic curves, around a handle a few cells across), and its lattice falls
-// otherwise at a face count a few percent off: on the generated genus 0-3 and ten clean surfaces at 1000-5000
-// faces (52 runs), nodes of four 238 -> 72 (METHOD.md). The time is each lay's, summed.
+// four, then more hexagons, among those within kTrialCountMiss of the faces asked. The global method's cuts come from
+// a few places where the lattice falls badly against the surface (next to parabolic curves, around a handle a few
+// cells across), and its lattice falls otherwise at a face count a few percent off: on the generated genus 0-3 and
+// ten clean surfaces at 1000-5000 faces (52 runs), nodes of four 238 -> 72 (METHOD.md). The time is each lay's,
+// summed.
 constexpr double kTrialCountMiss = 0.1;  // the goal: the face count within 10 % of the count asked
 PipelineResult withTrials(PipelineResult best, const PipelineParams& params, const PipelineParams& laidWith,
                           const ProgressFn& progress, const CancelFlag* cancel) {
