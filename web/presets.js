@@ -91,14 +91,14 @@ export const PRESETS = {
     model: 'phcpf_3holes_r.off',
     params: { faces: 1500, method: 'global' },
   },
-  // PH-CPF's car, closed and near-developable over a third of it, folds faces next to its near-parabolic parts that
-  // only cuts make planar: allowed a share of 0.3 its first lay comes out planar to 1e-9 with 72 faces cut in two,
-  // each cut making two nodes of four faces. (With the default share, a tenth, its lays stall at 2e-2 and the run lays
-  // it again with the rounds against folds on more folds: planar with 9 faces cut, 75 % hexagons.)
-  // (The genus 3 model was this preset's until its lattice's dislocations were cancelled: it now comes out planar
-  // with 4 faces cut by default, the preset above.)
-  'Planar at the price of cuts: the car upload with cut share 0.3': {
+  // PH-CPF's car, closed and near-developable over a third of it, folds faces next to its near-parabolic parts: laid
+  // on the smooth blend of its jets (its triangles are over a cell at 1000 faces), the lay kept first reached a P-Hex
+  // mesh only by cutting faces (184 nodes of four), and the run lays it again with the rounds against folds on more
+  // folds: planar to 1e-9 with no face cut, every node of three faces, 74 % hexagons (the pentagons and heptagons
+  // stand where the rounds merged vertices). (This preset was the car with a share of cuts of 0.3, planar with 72 faces
+  // cut, until its lays were laid again where they cut many faces.)
+  'Near-developable car upload (PH-CPF): planar, no face cut': {
     model: 'phcpf_car_r.off',
-    params: { faces: 1000, method: 'global', cutShare: 0.3 },
+    params: { faces: 1000, method: 'global' },
   },
 };

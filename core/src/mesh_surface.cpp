@@ -684,37 +684,42 @@ TriMesh MeshSurface::refined(int k, Blend blending) const {
   // `centre`): those within their reach of that ball, found through the vertices within the farthest reach of it
   // (so that neighbouring triangles find the same jets at their common points: a count of rings missed the long
   // edges' far-reaching jets of an uneven upload, and the refinement creased between triangles by 67 degrees).
-  std::vector<int> stamp(nv, -1), near, seen;
-  int gathered = 0;
-  auto gather = [&](std::initializer_list<int> ids) {
-    ++gathered;
-    near.clear();
+  // Each range of points (parallelRanges) gathers into scratch of its own; every point is blended on its own, so
+  // the refinement is the same whatever the thread count.
+  struct Gathered {
+    std::vector<int> stamp, near, seen;
+    int round = 0;
+  };
+  auto gather = [&](Gathered& g, std::initializer_list<int> ids) {
+    if (g.stamp.empty()) g.stamp.assign(nv, -1);
+    ++g.round;
+    g.near.clear();
     if (!smooth) return;
-    seen.clear();
+    g.seen.clear();
     Vec3 centre = Vec3::Zero();
     for (int c : ids) centre += mesh_.V.row(c).transpose() / double(ids.size());
     double radius = 0;
     for (int c : ids) radius = std::max(radius, (Vec3(mesh_.V.row(c).transpose()) - centre).norm());
     for (int c : ids)
-      if (stamp[c] != gathered) stamp[c] = gathered, seen.push_back(c);
-    for (std::size_t i = 0; i < seen.size(); ++i) {
-      const int u = seen[i];
+      if (g.stamp[c] != g.round) g.stamp[c] = g.round, g.seen.push_back(c);
+    for (std::size_t i = 0; i < g.seen.size(); ++i) {
+      const int u = g.seen[i];
       const double d = (Vec3(mesh_.V.row(u).transpose()) - centre).norm();
-      if (d < radius + reach[u]) near.push_back(u);
+      if (d < radius + reach[u]) g.near.push_back(u);
       if (!(d < radius + farthestReach)) continue;
       for (int j = neighbourStart_[u]; j < neighbourStart_[u + 1]; ++j)
-        if (const int w = neighbours_[j]; stamp[w] != gathered) stamp[w] = gathered, seen.push_back(w);
+        if (const int w = neighbours_[j]; g.stamp[w] != g.round) g.stamp[w] = g.round, g.seen.push_back(w);
     }
   };
   // The point at barycentric coordinates b of the triangle (or edge, or vertex) `ids`, whose jets' vertices are
-  // gathered: its projections onto the jets that reach it, weighted by Wendland's C2 function of the distance over
-  // the reach. The weights are smooth in space where barycentric ones kink at every edge.
-  auto blend = [&](const int ids[3], const double b[3]) {
+  // gathered in `g`: its projections onto the jets that reach it, weighted by Wendland's C2 function of the distance
+  // over the reach. The weights are smooth in space where barycentric ones kink at every edge.
+  auto blend = [&](const Gathered& g, const int ids[3], const double b[3]) {
     Vec3 x = Vec3::Zero();
     for (int c = 0; c < 3; ++c) x += b[c] * mesh_.V.row(ids[c]).transpose();
     Vec3 q = Vec3::Zero();
     double total = 0;
-    for (int v : near) {
+    for (int v : g.near) {
       const double d = (x - Vec3(mesh_.V.row(v).transpose())).norm() / reach[v];
       if (!(d < 1)) continue;
       const double w = (1 - d) * (1 - d) * (1 - d) * (1 - d) * (4 * d + 1);
@@ -730,32 +735,36 @@ TriMesh MeshSurface::refined(int k, Blend blending) const {
   };
   // Every edge's k - 1 inner points, from its lower vertex id to its higher, in the order of the adjacency
   // (each vertex's neighbours, sorted): the edge a-b (a < b) is neighbours_[j] = b of a's row, its points from
-  // edgeFirst[j] on.
+  // edgeFirst[j] on. Then each triangle's inner points, (k - 1)(k - 2) / 2 of them, in the order of the triangles.
   std::vector<int> edgeFirst(neighbours_.size(), -1);
-  Eigen::Index edgeCount = 0;
-  for (int a = 0; a < nv; ++a)
-    for (int j = neighbourStart_[a]; j < neighbourStart_[a + 1]; ++j) edgeCount += neighbours_[j] > a;
-  const std::size_t inner = static_cast<std::size_t>(k - 1) * (k - 2) / 2;
-  TriMesh out;
-  out.V.resize(nv + edgeCount * (k - 1) + static_cast<Eigen::Index>(nf * inner), 3);
-  for (int a = 0; a < nv; ++a) {
-    const int ids[3] = {a, a, a};
-    const double b[3] = {1.0, 0.0, 0.0};
-    gather({a});
-    out.V.row(a) = blend(ids, b).transpose();
-  }
   Eigen::Index next = nv;
   for (int a = 0; a < nv; ++a)
-    for (int j = neighbourStart_[a]; j < neighbourStart_[a + 1]; ++j) {
-      if (neighbours_[j] < a) continue;
-      edgeFirst[j] = static_cast<int>(next);
-      const int ids[3] = {a, neighbours_[j], a};
-      gather({a, neighbours_[j]});
-      for (int i = 1; i < k; ++i) {
-        const double b[3] = {double(k - i) / k, double(i) / k, 0.0};
-        out.V.row(next++) = blend(ids, b).transpose();
+    for (int j = neighbourStart_[a]; j < neighbourStart_[a + 1]; ++j)
+      if (neighbours_[j] > a) edgeFirst[j] = static_cast<int>(next), next += k - 1;
+  const Eigen::Index facesFirst = next;
+  const std::size_t inner = static_cast<std::size_t>(k - 1) * (k - 2) / 2;
+  TriMesh out;
+  out.V.resize(facesFirst + static_cast<Eigen::Index>(nf * inner), 3);
+  // The blend's cost is in its walks and projections (a few microseconds a point): ranges of a few hundred.
+  constexpr int kBlendGrain = 256;
+  parallelRanges(nv, kBlendGrain, [&](int begin, int end) {
+    Gathered g;
+    for (int a = begin; a < end; ++a) {
+      const int ids[3] = {a, a, a};
+      const double b[3] = {1.0, 0.0, 0.0};
+      gather(g, {a});
+      out.V.row(a) = blend(g, ids, b).transpose();
+      for (int j = neighbourStart_[a]; j < neighbourStart_[a + 1]; ++j) {
+        if (neighbours_[j] < a) continue;
+        const int edge[3] = {a, neighbours_[j], a};
+        gather(g, {a, neighbours_[j]});
+        for (int i = 1; i < k; ++i) {
+          const double c[3] = {double(k - i) / k, double(i) / k, 0.0};
+          out.V.row(edgeFirst[j] + i - 1) = blend(g, edge, c).transpose();
+        }
       }
     }
+  });
   auto edgePoint = [&](int a, int b, int i) {  // the point i / k of the way from a to b (0 < i < k)
     const int lo = std::min(a, b), hi = std::max(a, b);
     const int* row = neighbours_.data();
@@ -763,33 +772,36 @@ TriMesh MeshSurface::refined(int k, Blend blending) const {
     return edgeFirst[j] + (a < b ? i : k - i) - 1;
   };
   out.F.resize(static_cast<Eigen::Index>(nf) * k * k, 3);
-  Eigen::Index t = 0;
-  std::vector<int> lattice(static_cast<std::size_t>(k + 1) * (k + 1));
-  for (int f = 0; f < nf; ++f) {
-    const int ids[3] = {mesh_.F(f, 0), mesh_.F(f, 1), mesh_.F(f, 2)};
-    gather({ids[0], ids[1], ids[2]});
-    // Point (i, j): a + i / k (b - a) + j / k (c - a).
-    auto at = [&](int i, int j) -> int& { return lattice[static_cast<std::size_t>(j) * (k + 1) + i]; };
-    for (int j = 0; j <= k; ++j)
-      for (int i = 0; i + j <= k; ++i) {
-        if (i == 0 && j == 0) at(i, j) = ids[0];
-        else if (i == k) at(i, j) = ids[1];
-        else if (j == k) at(i, j) = ids[2];
-        else if (j == 0) at(i, j) = edgePoint(ids[0], ids[1], i);
-        else if (i == 0) at(i, j) = edgePoint(ids[0], ids[2], j);
-        else if (i + j == k) at(i, j) = edgePoint(ids[1], ids[2], j);
-        else {
-          const double b[3] = {double(k - i - j) / k, double(i) / k, double(j) / k};
-          out.V.row(next) = blend(ids, b).transpose();
-          at(i, j) = static_cast<int>(next++);
+  parallelRanges(nf, std::max(1, kBlendGrain / std::max<int>(1, static_cast<int>(inner))), [&](int begin, int end) {
+    Gathered g;
+    std::vector<int> lattice(static_cast<std::size_t>(k + 1) * (k + 1));
+    for (int f = begin; f < end; ++f) {
+      const int ids[3] = {mesh_.F(f, 0), mesh_.F(f, 1), mesh_.F(f, 2)};
+      if (inner > 0) gather(g, {ids[0], ids[1], ids[2]});
+      Eigen::Index point = facesFirst + static_cast<Eigen::Index>(f * inner), t = static_cast<Eigen::Index>(f) * k * k;
+      // Point (i, j): a + i / k (b - a) + j / k (c - a).
+      auto at = [&](int i, int j) -> int& { return lattice[static_cast<std::size_t>(j) * (k + 1) + i]; };
+      for (int j = 0; j <= k; ++j)
+        for (int i = 0; i + j <= k; ++i) {
+          if (i == 0 && j == 0) at(i, j) = ids[0];
+          else if (i == k) at(i, j) = ids[1];
+          else if (j == k) at(i, j) = ids[2];
+          else if (j == 0) at(i, j) = edgePoint(ids[0], ids[1], i);
+          else if (i == 0) at(i, j) = edgePoint(ids[0], ids[2], j);
+          else if (i + j == k) at(i, j) = edgePoint(ids[1], ids[2], j);
+          else {
+            const double b[3] = {double(k - i - j) / k, double(i) / k, double(j) / k};
+            out.V.row(point) = blend(g, ids, b).transpose();
+            at(i, j) = static_cast<int>(point++);
+          }
         }
-      }
-    for (int j = 0; j < k; ++j)
-      for (int i = 0; i + j < k; ++i) {
-        out.F.row(t++) << at(i, j), at(i + 1, j), at(i, j + 1);
-        if (i + j + 1 < k) out.F.row(t++) << at(i + 1, j), at(i + 1, j + 1), at(i, j + 1);
-      }
-  }
+      for (int j = 0; j < k; ++j)
+        for (int i = 0; i + j < k; ++i) {
+          out.F.row(t++) << at(i, j), at(i + 1, j), at(i, j + 1);
+          if (i + j + 1 < k) out.F.row(t++) << at(i + 1, j), at(i + 1, j + 1), at(i, j + 1);
+        }
+    }
+  });
   return out;
 }
 

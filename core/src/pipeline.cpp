@@ -237,6 +237,11 @@ constexpr double kCoarseUpload = 1.5, kRefinedEdge = 0.5;
 // bench's upload at 10k faces was refined 3 x 3 for 0.4 s more (1.2 s against the 1 s goal) and 0.2 points of
 // hexagons, and the noisy shared models changed both ways (the intersection shell at 1000 and 1500 faces +4.6 and
 // +8.9 points, the car at 1000 reaching a P-Hex mesh by cutting 94 faces, 1.5 % of the diagonal off).
+// A noisy upload (noisyUpload: a scan, a faceted model) is refined from kCoarseUneven cells on too (stop 31): laid
+// finer than its triangles, its facets' kinks fold the dual. The Concerthall at 10000 faces (triangles of 1.2 cells):
+// 2703 -> 675 invalid stars, 73.9 -> 77.2 % hexagons, 218 -> 144 nodes of four, 46 -> 16 s; over the six shared
+// models at 1000-10000 faces the nodes of four 414 -> 282, the same hexagons (METHOD.md, Coarse uploads). From 0.8
+// cells the Concerthall at 5000 faces (0.87) lost 6 points.
 constexpr double kCoarseUneven = 1.0, kUnevenSpread = 4.0;
 // The finer refinements refinementFor weighs against the global method's field mesh, and how far (a ratio either way)
 // the field mesh's edge may come out of the two splits from its own before they are weighed.
@@ -288,7 +293,7 @@ struct Refinement {
 Refinement refinementFor(const MeshSurface& mesh, double size, double cell) {
   if (mesh.planar() || creased(mesh) || !(cell > 0) || !(size > kCoarseUneven * cell)) return {};
   const bool uneven = unevenEdges(mesh.mesh());  // a pass over every edge: only where a refinement may follow
-  if (!(size > kCoarseUpload * cell) && !uneven) return {};
+  if (!(size > kCoarseUpload * cell) && !uneven && !noisyUpload(mesh)) return {};
   const MeshSurface::Blend blend = uneven ? MeshSurface::Blend::Barycentric : MeshSurface::Blend::Smooth;
   const double most = std::floor(std::sqrt(double(MeshSurface::kMaxRefinedTriangles) / double(mesh.mesh().F.rows())));
   const int smooth = static_cast<int>(std::clamp(std::ceil(size / (kRefinedEdge * cell)), 1.0, std::max(1.0, most)));
@@ -1097,8 +1102,9 @@ TriangulationStage triangulateOn(const PipelineParams& given, const ProgressFn& 
         const std::shared_ptr<const MeshSurface> refined = refinedUpload(upload, by);
         std::ostringstream s;
         s.precision(3);
-        s << "the uploaded mesh is coarse for this lay (its triangles' size " << size
-          << " against a cell of " << cellAsked << "): ";
+        s << "the uploaded mesh is coarse for this lay (its triangles' size " << size << " against a cell of " << cellAsked
+          << (size > kCoarseUpload * cellAsked || uneven ? "" : "; a noisy mesh's facets kink the lay from one cell on")
+          << "): ";
         // Too coarse for its fits to agree (a steep dome sampled 4 x 4, whose fits around a corner span most
         // of it): their blend would crease where the mesh does not, so the facets are laid as they are. A noisy
         // upload's facets turn sharply themselves: refined where that turns less sharply than they do (PH-CPF's
@@ -2454,26 +2460,39 @@ PipelineResult layAndRelay(const PipelineParams& params, const ProgressFn& progr
 PipelineResult runPipeline(const PipelineParams& params, const ProgressFn& progress, const CancelFlag* cancel) {
   PipelineResult kept = layAndRelay(params, progress, cancel);
   // Where no lay reached a P-Hex mesh (the solve stalled short of the tolerance: the coarse, near-developable shared
-  // models fold a tenth to a fifth of their faces), all of it once more with the rounds against folds run also
-  // where up to kFoldRescueShare of the faces fold, kept where that reaches one (kFoldRescueShare).
-  if (params.relay && params.foldFlips && kept.method == TriangulationMethod::Global && !reached(kept) &&
+  // models fold a tenth to a fifth of their faces), or the lay kept reached one only with nodes of four faces from cuts
+  // at over kRelayNodesOfFour of its faces (the car at 1500 faces laid on its refinement, whose relay reached one with
+  // 262), all of it once more with the rounds against folds run also where up to kFoldRescueShare of the faces fold;
+  // kept where that reaches one, with fewer such nodes where the first reached one too.
+  const bool cutMany = reached(kept) && nodesOfFourCut(kept) > kRelayNodesOfFour * kept.metrics.faceCount;
+  if (params.relay && params.foldFlips && kept.method == TriangulationMethod::Global && (!reached(kept) || cutMany) &&
       params.foldRoundsShare < kFoldRescueShare) {
     PipelineParams again = laidAgainWith(params, kept);
     again.foldRoundsShare = kFoldRescueShare;
-    if (progress) progress({"triangulate", 0, "laying again with the rounds against folds on more folds (no lay reached a P-Hex mesh)"});
+    if (progress)
+      progress({"triangulate", 0,
+                cutMany ? "laying again with the rounds against folds on more folds (the lay kept cut many faces)"
+                        : "laying again with the rounds against folds on more folds (no lay reached a P-Hex mesh)"});
     std::ostringstream s;
     s.precision(2);
-    s << "no lay reached a P-Hex mesh (planarity " << kept.metrics.planarityMax
-      << "); laid again with the edge collapses and flips against folds run also where more than "
+    if (cutMany)
+      s << "the lay kept reached a P-Hex mesh only with " << nodesOfFourCut(kept)
+        << " nodes of four faces from its cuts (over " << std::lround(100 * kRelayNodesOfFour) << " % of its faces)";
+    else
+      s << "no lay reached a P-Hex mesh (planarity " << kept.metrics.planarityMax << ")";
+    s << "; laid again with the edge collapses and flips against folds run also where more than "
       << std::lround(100 * params.foldRoundsShare) << " % of the faces fold (up to " << std::lround(100 * kFoldRescueShare)
       << " %), fewer hexagons for planar faces";
     std::optional<PipelineResult> second =
         layAgainWith([&] { return layAndRelay(again, progress, cancel); }, kept, kept.relay, s.str(), "the first is");
     if (second) {
-      const bool better = reached(*second);
-      s << (better ? ": it reached one (" + std::to_string(second->metrics.faceCount) + " faces, " +
-                         std::to_string(nodesOfFourCut(*second)) + " nodes of four faces from cuts): kept"
-                   : std::string(": it did not reach one either: the first is kept"));
+      const bool better = reached(*second) && (!reached(kept) || nodesOfFourCut(*second) < nodesOfFourCut(kept));
+      s << (better            ? ": it reached one (" + std::to_string(second->metrics.faceCount) + " faces, " +
+                                    std::to_string(nodesOfFourCut(*second)) + " nodes of four faces from cuts): kept"
+            : reached(*second) ? ": it reached one with " + std::to_string(nodesOfFourCut(*second)) +
+                                     " nodes of four faces from cuts: the first is kept"
+            : cutMany          ? std::string(": it did not reach one: the first is kept")
+                               : std::string(": it did not reach one either: the first is kept"));
       PipelineResult& laid = better ? *second : kept;
       laid.triangulation.notes.push_back(s.str());
       const PipelineResult::Relay relay = laid.relay;

@@ -512,21 +512,24 @@ test('the genus-3 preset loads its bundled model, tiles it with the global metho
   assert.deepEqual(pageErrors, []);
 });
 
-// The car with a share of cuts of 0.3: the preset sets the form's cut share, the run sends it, and the mesh comes out
-// planar (by default it comes out planar too, laid again where its lays stall), the share kept in the link.
-test('the cut-share preset comes out planar with faces cut, and its link keeps the share', async () => {
-  await afterRun(() => page.click('button[data-preset^="Planar at the price of cuts"]'));
+// The near-developable car: the preset comes out planar with no face split (every node of three faces). A share of
+// cuts set in the form is sent with the run and kept in the link, and dropped from it at its default.
+test('the car preset comes out planar with no face split, and a link keeps a cut share set', async () => {
+  await afterRun(() => page.click('button[data-preset^="Near-developable car upload"]'));
   assert.equal(await page.getAttribute('body', 'data-state'), 'ready', await page.textContent('#error'));
-  assert.equal(await page.inputValue('#cutShare'), '0.3');
-  assert.match(page.url(), /cutShare=0\.3/);
   const planarity = Number((await page.textContent('#planarity-max')).replace(/[^0-9.e+-]/g, ''));
   assert.ok(planarity <= 1e-9, `planarity ${await page.textContent('#planarity-max')}`);
+  assert.doesNotMatch(await page.textContent('#iterations'), /split/);
   await afterRun(() => page.click('#mesh-clear'));
   // (The field is among the advanced ones, folded away: set as the form would.)
-  await afterRun(() => page.$eval('#cutShare', (e) => {
-    e.value = '0.1';
+  const setShare = (value) => afterRun(() => page.$eval('#cutShare', (e, v) => {
+    e.value = v;
     e.dispatchEvent(new Event('input', { bubbles: true }));
-  }));
+  }, value));
+  await setShare('0.3');
+  assert.equal(await page.getAttribute('body', 'data-state'), 'ready', await page.textContent('#error'));
+  assert.match(page.url(), /cutShare=0\.3/);
+  await setShare('0.1');
   await afterRun(() => page.selectOption('#method', 'auto'));
   assert.doesNotMatch(page.url(), /cutShare/);
   assert.deepEqual(pageErrors, []);

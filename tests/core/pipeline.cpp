@@ -7,6 +7,7 @@
 #include <optional>
 #include <sstream>
 
+#include "notes.hpp"
 #include "phex/error.hpp"
 #include "phex/mesh_io.hpp"
 #include "phex/mesh_surface.hpp"
@@ -15,6 +16,7 @@
 #include "phex/surfaces.hpp"
 
 using namespace phex;
+using test::allNotes;
 
 namespace {
 
@@ -25,13 +27,6 @@ MeshInput sampledUpload(const std::string& surface, int faces, const SurfacePara
   const ParametricSurfacePtr s = makeSurface(surface, params);
   const std::string obj = toObj(latticeTriangulation(*s, cellForFaceCount(*s, faces)).mesh);
   return MeshInput{std::vector<std::uint8_t>(obj.begin(), obj.end()), "obj", surface + ".obj"};
-}
-
-// A triangulation's notes, one a line (for INFO and find).
-std::string allNotes(const Triangulation& triangulation) {
-  std::string notes;
-  for (const std::string& note : triangulation.notes) notes += note + "\n";
-  return notes;
 }
 
 // A developable's P-Hex mesh as §3 has it: quad-shaped hexagons planar as laid (no solver iteration), none

@@ -56,33 +56,15 @@ for (const [label, preset] of paperFigures) {
 
 // The global method's presets show what it claims on any surface: the model covered, its singular points adding
 // up to 12 (1 - g), a closed P-Hex mesh consistent with its report, no face crossing itself; and issue 31's goal,
-// planar with no face cut, as a todo until the core (being tuned) meets it.
+// planar with no face cut (every node of three faces).
 for (const [label, preset] of globalPresets) {
-  let result;
-  const run = () => (result ??= phex.run(runParams(preset)));
-  test(`preset "${label}"`, async () => {
-    const r = await run();
+  test(`preset "${label}": planar, no face cut (issue 31)`, async () => {
+    const r = await phex.run(runParams(preset));
     assert.equal(r.method, 'global');
     assert.equal(assertSingularities(r.triangulation.singularities), 12 * (1 - MODEL_GENUS[preset.model]));
     assertClosedDual(r, MODEL_GENUS[preset.model]);
     assert.equal(r.metrics.selfIntersectingCount, 0);
     assert.ok(r.triangulation.check.coverage > 0.95, `coverage ${r.triangulation.check.coverage}`);
-    // With a larger share of cuts allowed, planar at the price of the cuts (which assertClosedDual counts). With the
-    // default share its lays stall, and the run lays it again with the rounds against folds on more folds: planar
-    // too, with fewer faces cut (the car at 1000 faces: 9 against 72).
-    if (preset.params.cutShare) {
-      assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
-      assert.ok(r.solve.interiorFacesSplit > 0, 'faces cut');
-      const { cutShare, ...defaults } = preset.params;
-      const plain = await phex.run(runParams({ ...preset, params: defaults }));
-      assert.ok(plain.solve.converged && plain.metrics.planarityMax <= 1e-9, String(plain.metrics.planarityMax));
-      assert.ok(plain.triangulation.notes.some((n) => /no lay reached a P-Hex mesh/.test(n)), plain.triangulation.notes.join('\n'));
-      assert.ok(plain.solve.interiorFacesSplit < r.solve.interiorFacesSplit,
-        `${plain.solve.interiorFacesSplit} faces cut by default against ${r.solve.interiorFacesSplit} with cutShare ${cutShare}`);
-    }
-  });
-  test(`preset "${label}": planar, no face cut (issue 31)`, { todo: 'the core does not reach planarity on it without cuts yet' }, async () => {
-    const r = await run();
     assertNoCut(r);
     assert.ok(r.solve.converged && r.metrics.planarityMax <= 1e-9, String(r.metrics.planarityMax));
   });

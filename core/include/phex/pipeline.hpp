@@ -31,7 +31,8 @@ constexpr double kRelayAnisotropy = 2.5, kRelayFloor = 0.05, kRelayNodesOfFour =
 // The rounds against folds that align before they merge (PipelineParams::foldAlignRounds; see fold_rounds.cpp).
 constexpr int kAlignRounds = 3;
 // The rounds against folds run where at most kFoldFlipShare of the faces fold (PipelineParams::foldRoundsShare), and
-// where no lay reached a P-Hex mesh, all is laid again with kFoldRescueShare (runPipeline; see pipeline.cpp).
+// where no lay reached a P-Hex mesh, or the lay kept reached one only with nodes of four faces from cuts at over
+// kRelayNodesOfFour of its faces, all is laid again with kFoldRescueShare (runPipeline; see pipeline.cpp).
 constexpr double kFoldFlipShare = 0.08, kFoldRescueShare = 0.25;
 // The global method's trial lays (PipelineParams::relay): where the lay kept still has nodes of four faces from
 // cuts, at up to kTrialMostFaces faces, it is laid again for kTrialShares of the faces (its lattice then falls
@@ -148,7 +149,7 @@ struct PipelineParams {
   int foldAlignRounds = kAlignRounds;
   // The largest share of the faces folded (in the dual solved with folds allowed) at which those rounds run; more
   // folded, the run cuts them instead (kFoldFlipShare; runPipeline raises it to kFoldRescueShare where no lay reached
-  // a P-Hex mesh). Not an option of the command line or the library.
+  // a P-Hex mesh, or only with many nodes of four from cuts). Not an option of the command line or the library.
   double foldRoundsShare = kFoldFlipShare;
   // The global method's position field with its dislocations cancelled before the extraction
   // (GlobalOptions::cancelDislocations): each lattice dislocation (a vertex of five next to one of seven) joined
