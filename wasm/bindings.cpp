@@ -278,6 +278,7 @@ val resultToJs(const phex::PipelineResult& r) {
   clip.set("nodesAdded", r.boundaryClip.nodesAdded);
   clip.set("nodesRemoved", r.boundaryClip.nodesRemoved);
   clip.set("fillers", r.boundaryClip.fillers);
+  clip.set("cutDropped", r.boundaryClip.cutDropped);
   clip.set("removed", r.boundaryClip.removed);
   clip.set("gapMax", r.boundaryClip.gapMax);
   out.set("boundaryClip", clip);

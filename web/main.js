@@ -435,6 +435,7 @@ function showStats({ metrics, solve, timings, method, field, triangulation, dual
     ? '–'
     : [boundaryClip?.panels ? `${boundaryClip.panels} panels clipped` : null, boundaryClip?.skipped ? `${boundaryClip.skipped} not` : null,
        boundaryClip?.fillers ? `${boundaryClip.fillers} fillers` : null,
+       boundaryClip?.cutDropped ? `${boundaryClip.cutDropped} cut panel${boundaryClip.cutDropped > 1 ? 's' : ''} dropped` : null,
        boundaryClip?.removed ? `${boundaryClip.removed} outside removed` : null,
        boundaryClip?.panels ? `gap ${boundaryClip.gapMax.toFixed(3)} edges` : null, `nodes off ${boundaryOffset.max.toFixed(3)} edges max`]
         .filter(Boolean)

@@ -294,6 +294,7 @@ json reportJson(const phex::PipelineParams& p, const phex::PipelineResult& r) {
           {"boundaryClip", {{"panels", r.boundaryClip.panels}, {"skipped", r.boundaryClip.skipped},
                             {"nodesMoved", r.boundaryClip.nodesMoved}, {"nodesAdded", r.boundaryClip.nodesAdded},
                             {"nodesRemoved", r.boundaryClip.nodesRemoved}, {"fillers", r.boundaryClip.fillers},
+                            {"cutDropped", r.boundaryClip.cutDropped},
                             {"removed", r.boundaryClip.removed},
                             {"gapMax", r.boundaryClip.gapMax}}},
           {"mesh", {{"vertices", r.metrics.vertexCount}, {"faces", r.metrics.faceCount}, {"facesBySize", bySize}}},

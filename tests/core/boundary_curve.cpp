@@ -276,7 +276,9 @@ TEST_CASE("boundary clip: a panel wholly outside the curve is removed, and its n
 TEST_CASE("pipeline: a sliver of a boundary panel cut against a fold, outside the curve, is removed") {
   // The hyperbolic paraboloid laid globally at 1000 faces cuts one boundary panel against a fold; the piece
   // between the cut and the curve lies beyond the curve (its clipped outline turned over, so it was left unclipped
-  // with its neighbours' ends held): removed, every boundary panel is clipped.
+  // with its neighbours' ends held): removed, every boundary panel is clipped. (Since cut panels are left out before
+  // the clip where that clips as well, the whole panel goes before the clip sees its sliver: the clip's removal is
+  // tested on its own above.)
   PipelineParams p;
   p.surface = "hyperbolic-paraboloid";
   p.method = TriangulationMethod::Global;
@@ -291,7 +293,7 @@ TEST_CASE("pipeline: a sliver of a boundary panel cut against a fold, outside th
   const PipelineResult r = runPipeline(p);
   REQUIRE(r.solve.converged);
   CHECK(r.metrics.planarityMax <= 1e-9);
-  CHECK(r.boundaryClip.removed == 1);
+  CHECK(r.boundaryClip.removed + r.boundaryClip.cutDropped == 1);
   CHECK(r.boundaryClip.skipped == 0);
   CHECK(r.boundaryClip.gapMax < 0.3);
   REQUIRE(r.dual.faceVertex.size() == static_cast<std::size_t>(r.hex.faceCount()));
@@ -306,5 +308,54 @@ TEST_CASE("pipeline: a sliver of a boundary panel cut against a fold, outside th
     torn += ends[v] != 0 && ends[v] != 2, lone += faces[v] == 0, crowded += faces[v] > 3;
   CHECK(torn == 0);
   CHECK(lone == 0);
-  CHECK(crowded == 0);  // the cut's node of four went with the sliver
+  CHECK(crowded == 0);  // the cut's node of four went with the sliver (or the panel)
+}
+
+// A boundary panel that only a cut in two made planar (the cut's inner end a node of four faces) is left out before
+// the clip, which takes its neighbours to the curve: PH-CPF's open annulus six_s0 (tests/data, CC BY-SA 4.0) at 1000
+// faces, its first lay, cuts 3 interior faces and 1 boundary panel (measured): with the clip, the panel goes and
+// only the interior cuts' nodes of four are left; without it, the panel stays cut.
+TEST_CASE("pipeline: a boundary panel that only a cut made planar is left out, and its neighbours clipped to the curve") {
+  std::ifstream in(PHEX_TEST_DATA "/phcpf_six_s0.off", std::ios::binary);
+  REQUIRE(in);
+  PipelineParams p;
+  p.mesh = MeshInput{};
+  const std::string text(std::istreambuf_iterator<char>(in), {});
+  p.mesh->bytes.assign(text.begin(), text.end());
+  p.mesh->format = "off";
+  p.mesh->name = "phcpf_six_s0.off";
+  p.faces = 1000;
+  p.relay = false;  // its first lay (trial lays would replace it where its cuts left nodes of four)
+  auto crowded = [](const PipelineResult& x) {  // nodes of four faces or more, as measured
+    int n = 0;
+    for (const auto& [faces, count] : x.metrics.vertexValence) n += faces >= 4 ? count : 0;
+    return n;
+  };
+  const PipelineResult r = runPipeline(p);
+  REQUIRE(r.solve.converged);
+  CHECK(r.metrics.planarityMax <= 1e-9);
+  CHECK(r.metrics.selfIntersectingCount == 0);
+  REQUIRE(r.boundaryClip.cutDropped >= 1);
+  CHECK(r.boundaryPanelsSplit == 0);
+  CHECK(crowded(r) == 2 * r.interiorFacesSplit);
+  CHECK(r.boundaryClip.skipped == 0);
+  CHECK(r.coverageGap <= 1);
+  CHECK(std::any_of(r.triangulation.notes.begin(), r.triangulation.notes.end(),
+                    [](const std::string& n) { return n.find("only a cut in two made planar") != std::string::npos; }));
+  REQUIRE(r.dual.faceVertex.size() == static_cast<std::size_t>(r.hex.faceCount()));
+  REQUIRE(r.dual.boundaryFace.size() == static_cast<std::size_t>(r.hex.faceCount()));
+  // A manifold: every node on two edges of the outline or none, and on some face.
+  std::vector<int> ends(static_cast<std::size_t>(r.hex.V.rows()), 0), faces(ends.size(), 0);
+  for (const auto& [a, b] : outlineEdges(r.hex)) ++ends[a], ++ends[b];
+  for (int id : r.hex.indices) ++faces[id];
+  for (std::size_t v = 0; v < ends.size(); ++v) {
+    CHECK((ends[v] == 0 || ends[v] == 2));
+    CHECK(faces[v] > 0);
+  }
+  p.clipBoundary = false;
+  const PipelineResult raw = runPipeline(p);
+  CHECK(raw.interiorFacesSplit == r.interiorFacesSplit);
+  CHECK(raw.boundaryPanelsSplit == r.boundaryClip.cutDropped);
+  CHECK(raw.boundaryClip.cutDropped == 0);
+  CHECK(crowded(raw) == crowded(r) + raw.boundaryPanelsSplit);
 }

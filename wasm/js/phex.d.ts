@@ -275,7 +275,7 @@ export interface Result {
    * not be clipped, how far their edges stay from it), in mean panel edges, at most 2; `removed`: boundary panels
    * lying wholly outside the curve (a sliver of a panel cut against a fold), taken away before the panels then on
    * the boundary were clipped. All 0 on a closed surface. */
-  boundaryClip: { panels: number; skipped: number; nodesMoved: number; nodesAdded: number; nodesRemoved: number; fillers: number; removed: number; gapMax: number };
+  boundaryClip: { panels: number; skipped: number; nodesMoved: number; nodesAdded: number; nodesRemoved: number; fillers: number; removed: number; cutDropped: number; gapMax: number };
   /** A second lay (`relay: 'on'`): whether it ran, whether this result is its, and how the first lay ended: whether
    * it reached a P-Hex mesh, the nodes of four faces its cuts made (two per interior face cut, one per boundary
    * panel) and its coverage gap (mean panel edges). Either method 'global''s lay again following the Dupin metric

@@ -107,6 +107,7 @@ struct BoundaryClip {
   int nodesRemoved = 0;  // boundary nodes of one panel replaced by the curve
   int fillers = 0;       // triangles filling the gap at a shared node left off the curve (kFillerOff)
   int removed = 0;       // boundary panels removed, lying wholly outside the curve
+  int cutDropped = 0;    // boundary panels cut in two, dropped before the clip (the pipeline's: no node of four left)
   // The edge as drawn: the largest distance of the curve's points to the P-Hex mesh's outline (the edges of one
   // panel), in mean edges (at most 2): the curve's height over the clipped panels' planes and the thinning, and
   // where panels could not be clipped, how far their edges stay from it.
