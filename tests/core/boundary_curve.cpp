@@ -25,6 +25,18 @@ TriMesh unitSquare() {
   return m;
 }
 
+// A model of tests/data (PHEX_TEST_DATA) as an upload, named `name`.
+MeshInput dataUpload(const std::string& file, const std::string& name) {
+  std::ifstream in(PHEX_TEST_DATA "/" + file, std::ios::binary);
+  REQUIRE(in);
+  const std::string text(std::istreambuf_iterator<char>(in), {});
+  MeshInput mesh;
+  mesh.bytes.assign(text.begin(), text.end());
+  mesh.format = "off";
+  mesh.name = name;
+  return mesh;
+}
+
 }  // namespace
 
 TEST_CASE("boundary curve: nearest point, and the offset across the surface without the height over it") {
@@ -207,14 +219,8 @@ TEST_CASE("pipeline: where two boundary panels meet along the curve, a filler tr
 }
 
 TEST_CASE("pipeline: an uploaded shell's boundary panels are clipped to its boundary loops") {
-  std::ifstream in(PHEX_TEST_DATA "/directional_botanic-garden-bubble.off", std::ios::binary);
-  REQUIRE(in);
   PipelineParams p;
-  p.mesh = MeshInput{};
-  const std::string text(std::istreambuf_iterator<char>(in), {});
-  p.mesh->bytes.assign(text.begin(), text.end());
-  p.mesh->format = "off";
-  p.mesh->name = "bubble.off";
+  p.mesh = dataUpload("directional_botanic-garden-bubble.off", "bubble.off");
   p.faces = 1000;
   const PipelineResult r = runPipeline(p);
   REQUIRE(r.solve.converged);
@@ -316,14 +322,8 @@ TEST_CASE("pipeline: a sliver of a boundary panel cut against a fold, outside th
 // faces, its first lay, cuts 3 interior faces and 1 boundary panel (measured): with the clip, the panel goes and
 // only the interior cuts' nodes of four are left; without it, the panel stays cut.
 TEST_CASE("pipeline: a boundary panel that only a cut made planar is left out, and its neighbours clipped to the curve") {
-  std::ifstream in(PHEX_TEST_DATA "/phcpf_six_s0.off", std::ios::binary);
-  REQUIRE(in);
   PipelineParams p;
-  p.mesh = MeshInput{};
-  const std::string text(std::istreambuf_iterator<char>(in), {});
-  p.mesh->bytes.assign(text.begin(), text.end());
-  p.mesh->format = "off";
-  p.mesh->name = "phcpf_six_s0.off";
+  p.mesh = dataUpload("phcpf_six_s0.off", "phcpf_six_s0.off");
   p.faces = 1000;
   p.relay = false;  // its first lay (trial lays would replace it where its cuts left nodes of four)
   auto crowded = [](const PipelineResult& x) {  // nodes of four faces or more, as measured
