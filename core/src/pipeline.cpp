@@ -16,6 +16,7 @@
 #include <optional>
 #include <sstream>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "fold_rounds.hpp"
 #include "phex/direction_field.hpp"
@@ -1687,58 +1688,50 @@ CutPanelsDropped dropCutPanels(PolyMesh& mesh, DualMesh& dual) {
     if (dual.boundaryFace[f] && dual.faceVertex[f] >= 0) ++piecesOf[dual.faceVertex[f]];
   std::vector<char> drop(static_cast<std::size_t>(F), 0);
   for (int f = 0; f < F; ++f) drop[f] = dual.boundaryFace[f] && dual.faceVertex[f] >= 0 && piecesOf[dual.faceVertex[f]] > 1;
-  // Only panels apart from one another (no node shared with another cut panel): where cut panels stand side by side
+  // Of cut panels that share a node, only the first (in face order) is left out: where cut panels stand side by side
   // (the helicoid, its rims near its asymptotic directions, at 3800 faces cut most of them) the clip cannot take
   // the panels behind them to the curve (its boundary nodes 1.4 edges off).
-  {
-    std::vector<int> owner(static_cast<std::size_t>(mesh.V.rows()), -1);
-    std::vector<char> crowded(static_cast<std::size_t>(F), 0);
-    for (int f = 0; f < F; ++f)
-      for (int i = 0; drop[f] && i < mesh.faceSize(f); ++i) {
-        int& o = owner[mesh.face(f)[i]];
-        if (o >= 0 && o != dual.faceVertex[f]) crowded[f] = 1;
-        else o = dual.faceVertex[f];
-      }
-    for (int f = 0; f < F; ++f)
-      for (int i = 0; drop[f] && i < mesh.faceSize(f); ++i)
-        if (const int o = owner[mesh.face(f)[i]]; o != dual.faceVertex[f]) crowded[f] = 1;
-    std::unordered_map<int, char> panelCrowded;
-    for (int f = 0; f < F; ++f)
-      if (drop[f] && crowded[f]) panelCrowded[dual.faceVertex[f]] = 1;
-    for (int f = 0; f < F; ++f)
-      if (drop[f] && panelCrowded.count(dual.faceVertex[f])) drop[f] = 0;
+  std::vector<int> owner(static_cast<std::size_t>(mesh.V.rows()), -1);  // the first cut panel (dual vertex) at a node
+  std::unordered_set<int> crowded;
+  for (int f = 0; f < F; ++f)
+    for (int i = 0; drop[f] && i < mesh.faceSize(f); ++i) {
+      int& o = owner[mesh.face(f)[i]];
+      if (o < 0) o = dual.faceVertex[f];
+      else if (o != dual.faceVertex[f]) crowded.insert(dual.faceVertex[f]);
+    }
+  std::unordered_set<int> panels;
+  for (int f = 0; f < F; ++f) {
+    if (drop[f] && crowded.count(dual.faceVertex[f])) drop[f] = 0;
+    if (drop[f]) panels.insert(dual.faceVertex[f]);
   }
+  if (panels.empty()) return out;
   PolyMesh rest;
   rest.V = mesh.V;
   std::vector<int> restOf;
   for (int f = 0; f < F; ++f)
     if (!drop[f]) rest.addFace(std::vector<int>(mesh.face(f), mesh.face(f) + mesh.faceSize(f))), restOf.push_back(f);
-  if (static_cast<int>(restOf.size()) == F || restOf.empty()) return out;
+  if (restOf.empty()) return out;
   // Still a manifold: every node of a dropped panel still on faces ends two outline edges.
-  std::unordered_map<std::uint64_t, int> edgeUses;
-  auto key = [](int a, int b) { return (std::uint64_t(std::min(a, b)) << 32) | std::uint32_t(std::max(a, b)); };
-  for (int f = 0; f < rest.faceCount(); ++f)
-    for (int i = 0, n = rest.faceSize(f); i < n; ++i) ++edgeUses[key(rest.face(f)[i], rest.face(f)[(i + 1) % n])];
-  std::vector<int> ends(static_cast<std::size_t>(mesh.V.rows()), 0), on(static_cast<std::size_t>(mesh.V.rows()), 0);
-  for (int f = 0; f < rest.faceCount(); ++f)
-    for (int i = 0, n = rest.faceSize(f); i < n; ++i) {
-      const int a = rest.face(f)[i], b = rest.face(f)[(i + 1) % n];
-      ++on[a];
-      if (edgeUses[key(a, b)] == 1) ++ends[a], ++ends[b];
-    }
+  const std::vector<std::pair<int, int>> outline = outlineEdges(rest);
+  std::vector<int> ends(static_cast<std::size_t>(mesh.V.rows()), 0), on(ends.size(), 0);
+  for (const auto& [a, b] : outline) ++ends[a], ++ends[b];
+  for (int id : rest.indices) ++on[id];
   for (int f = 0; f < F; ++f)
     for (int i = 0; drop[f] && i < mesh.faceSize(f); ++i)
       if (const int v = mesh.face(f)[i]; on[v] > 0 && ends[v] != 2) return out;
-  std::unordered_map<int, int> panels;
-  for (int f = 0; f < F; ++f)
-    if (drop[f]) panels.emplace(dual.faceVertex[f], 0);
+  // The faces now on the outline are boundary panels (clipped as such, and not counted among the interior faces).
+  auto key = [](int a, int b) { return (std::uint64_t(std::min(a, b)) << 32) | std::uint32_t(std::max(a, b)); };
+  std::unordered_set<std::uint64_t> onOutline;
+  for (const auto& [a, b] : outline) onOutline.insert(key(a, b));
   std::vector<int> faceVertex;
   std::vector<std::uint8_t> boundaryFace;
-  for (int f : restOf) faceVertex.push_back(dual.faceVertex[f]), boundaryFace.push_back(dual.boundaryFace[f]);
-  // The faces now on the outline are boundary panels (clipped as such, and not counted among the interior faces).
-  for (int f = 0; f < rest.faceCount(); ++f)
-    for (int i = 0, n = rest.faceSize(f); i < n; ++i)
-      if (edgeUses[key(rest.face(f)[i], rest.face(f)[(i + 1) % n])] == 1) boundaryFace[f] = 1;
+  for (int k = 0; k < rest.faceCount(); ++k) {
+    const int f = restOf[k];
+    faceVertex.push_back(dual.faceVertex[f]);
+    boundaryFace.push_back(dual.boundaryFace[f]);
+    for (int i = 0, n = rest.faceSize(k); i < n; ++i)
+      if (onOutline.count(key(rest.face(k)[i], rest.face(k)[(i + 1) % n]))) boundaryFace.back() = 1;
+  }
   dual.faceVertex = std::move(faceVertex);
   dual.boundaryFace = std::move(boundaryFace);
   mesh = std::move(rest);
